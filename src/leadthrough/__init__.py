@@ -1,0 +1,40 @@
+"""leadthrough: sensorless kinesthetic teaching (lead-through programming) of robot arms.
+
+Example:
+    >>> import leadthrough as lt
+    >>> robot = lt.robots.yumi()
+    >>> dyn = lt.Dynamics(robot)
+    >>> dyn.gravity(robot.home()).shape
+    (7,)
+"""
+
+from leadthrough import robots
+from leadthrough.description import (
+    DHParameters,
+    Joint,
+    JointFriction,
+    JointOrigin,
+    LinkInertial,
+    Placement,
+    RobotDescription,
+)
+from leadthrough.dynamics import Dynamics
+from leadthrough.errors import InputShapeError, LeadthroughError, RobotDescriptionError
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "DHParameters",
+    "Dynamics",
+    "InputShapeError",
+    "Joint",
+    "JointFriction",
+    "JointOrigin",
+    "LeadthroughError",
+    "LinkInertial",
+    "Placement",
+    "RobotDescription",
+    "RobotDescriptionError",
+    "__version__",
+    "robots",
+]

@@ -1,0 +1,34 @@
+"""Exceptions of leadthrough: one root, subclasses that carry their diagnostics."""
+
+from __future__ import annotations
+
+
+class LeadthroughError(Exception):
+    """Root of every error raised by leadthrough."""
+
+
+class RobotDescriptionError(LeadthroughError, ValueError):
+    """A robot description (TOML file, URDF or dataclass) is malformed.
+
+    Attributes:
+        source: File or object the description came from.
+        field: Dotted path of the offending field, e.g. ``joints[3].link.mass``.
+        reason: What is wrong with it.
+    """
+
+    def __init__(self, source: str, field: str, reason: str) -> None:
+        self.source = source
+        self.field = field
+        self.reason = reason
+        where = f"{source}: {field}" if field else source
+        super().__init__(f"{where}: {reason}")
+
+
+class InputShapeError(LeadthroughError, ValueError):
+    """An array passed to a model function has the wrong shape."""
+
+    def __init__(self, name: str, expected: tuple[int, ...], got: tuple[int, ...]) -> None:
+        self.name = name
+        self.expected = expected
+        self.got = got
+        super().__init__(f"{name}: expected shape {expected}, got {got}")

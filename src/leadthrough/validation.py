@@ -1,0 +1,76 @@
+"""Checks shared by the description dataclasses: each raises a RobotDescriptionError.
+
+The dataclasses validate their own fields and name them relative to themselves
+(``mass``); :func:`within` prefixes the path of the enclosing field
+(``joints[3].link.mass``) and the loaders add the file name, so that a user reads
+one line that names the file and the field.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from leadthrough.errors import RobotDescriptionError
+
+
+@contextmanager
+def within(prefix: str, source: str | None = None) -> Iterator[None]:
+    """Prefix the field path (and optionally set the source) of errors raised inside."""
+    try:
+        yield
+    except RobotDescriptionError as error:
+        field = f"{prefix}.{error.field}" if prefix and error.field else prefix or error.field
+        raise RobotDescriptionError(source or error.source, field, error.reason) from None
+
+
+def fail(field: str, reason: str) -> RobotDescriptionError:
+    """Make the error for ``field`` of a description whose source is not known yet."""
+    return RobotDescriptionError("robot description", field, reason)
+
+
+def real_array(field: str, value: ArrayLike, shape: tuple[int, ...]) -> NDArray[np.float64]:
+    """Return ``value`` as a read-only finite float array of ``shape``."""
+    try:
+        array = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise fail(field, f"expected numbers of shape {shape}, got {value!r}") from None
+    if array.shape != shape:
+        raise fail(field, f"expected shape {shape}, got {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise fail(field, f"must be finite, got {value!r}")
+    array.setflags(write=False)
+    return array
+
+
+def real(field: str, value: object, *, minimum: float | None = None, strict: bool = False) -> float:
+    """Return ``value`` as a finite float, optionally bounded below (``strict``: ``>``)."""
+    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
+        raise fail(field, f"expected a number, got {value!r}")
+    number = float(value)
+    if not np.isfinite(number):
+        raise fail(field, f"must be finite, got {number}")
+    if minimum is not None and (number <= minimum if strict else number < minimum):
+        relation = ">" if strict else ">="
+        raise fail(field, f"must be {relation} {minimum:g}, got {number:g}")
+    return number
+
+
+def symmetric_positive_definite(field: str, matrix: NDArray[np.float64]) -> None:
+    """Raise unless ``matrix`` is symmetric (to 1e-12 relative) and positive definite."""
+    scale = max(float(np.max(np.abs(matrix))), 1e-300)
+    if np.max(np.abs(matrix - matrix.T)) > 1e-12 * scale:
+        raise fail(field, "inertia must be symmetric")
+    if np.min(np.linalg.eigvalsh(matrix)) <= 0.0:
+        raise fail(field, "inertia must be positive definite")
+
+
+def rotation_matrix(field: str, value: ArrayLike) -> NDArray[np.float64]:
+    """Return ``value`` as a proper rotation matrix (orthonormal, det +1, to 1e-6)."""
+    matrix = real_array(field, value, (3, 3))
+    if np.max(np.abs(matrix @ matrix.T - np.eye(3))) > 1e-6 or np.linalg.det(matrix) < 0.0:
+        raise fail(field, "must be a rotation matrix (orthonormal, determinant +1)")
+    return matrix
