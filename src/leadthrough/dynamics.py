@@ -40,7 +40,7 @@ class Dynamics:
         self.data = self.model.createData()
         self.n = robot.n_joints
         self._flange = self.model.getFrameId(FLANGE_FRAME)
-        self._zeros = np.zeros(self.n)
+        self._upper_triangle = np.triu(np.ones((self.n, self.n), dtype=bool))
 
     def gravity(self, q: ArrayLike) -> FloatArray:
         """Gravity torque G(q) [Nm], shape (n,): the torque that holds the arm still."""
@@ -49,7 +49,7 @@ class Dynamics:
     def mass(self, q: ArrayLike) -> FloatArray:
         """Joint-space inertia matrix M(q) [kg m²], (n, n), rotor inertias included."""
         upper = pin.crba(self.model, self.data, self._vector(q, "q"))
-        return np.triu(upper) + np.triu(upper, 1).T
+        return np.where(self._upper_triangle, upper, upper.T)
 
     def coriolis(self, q: ArrayLike, qd: ArrayLike) -> FloatArray:
         """Coriolis/centrifugal matrix C(q, q̇) [kg m²/s], (n, n), Christoffel form."""

@@ -1,0 +1,49 @@
+"""The leadthrough command line: output a user reads and one-line errors."""
+
+import subprocess
+import sys
+
+import pytest
+
+from leadthrough.cli import main
+
+
+def test_info_summarises_the_yumi(capsys):
+    """`leadthrough info` lists every joint, the total mass and the condition of M."""
+    assert main(["info"]) == 0
+    out = capsys.readouterr().out
+    for k in range(1, 8):
+        assert f"joint_{k}" in out
+    assert "moving mass 5.094 kg" in out
+    assert "condition" in out
+    assert "-143.5 … 43.5" in out
+
+
+def test_info_reads_a_toml_file(tmp_path, capsys):
+    """`info --robot FILE.toml` loads the description written by save_robot."""
+    import leadthrough as lt
+
+    path = tmp_path / "arm.toml"
+    lt.robots.save_robot(lt.robots.yumi(), path)
+    assert main(["info", "--robot", str(path)]) == 0
+    assert "ABB YuMi" in capsys.readouterr().out
+
+
+def test_bad_robot_file_is_one_line_error(tmp_path, capsys):
+    """A malformed description exits with code 2 and one line naming the file and field."""
+    path = tmp_path / "broken.toml"
+    path.write_text('name = "x"\n[[joints]]\nname = "j"\n')
+    assert main(["info", "--robot", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "broken.toml" in err and "joints[0]" in err
+
+
+@pytest.mark.parametrize("args", [["--help"], ["info", "--help"]])
+def test_help_has_examples(args):
+    """Every command answers --help through the installed entry point."""
+    result = subprocess.run(
+        [sys.executable, "-m", "leadthrough.cli", *args], capture_output=True, text=True
+    )
+    assert result.returncode == 0
+    assert "usage: leadthrough" in result.stdout
