@@ -7,9 +7,9 @@ Usage:
 from __future__ import annotations
 
 import numpy as np
-from timing import parser, report, time_per_call
 
 import leadthrough as lt
+from timing import parser, report, time_per_call
 
 
 def main() -> None:

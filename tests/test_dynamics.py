@@ -11,11 +11,13 @@ import leadthrough as lt
 
 @pytest.fixture(scope="module")
 def yumi() -> lt.RobotDescription:
+    """The shipped YuMi description."""
     return lt.robots.yumi()
 
 
 @pytest.fixture(scope="module")
 def dyn(yumi: lt.RobotDescription) -> lt.Dynamics:
+    """Dynamics of the YuMi."""
     return lt.Dynamics(yumi)
 
 
@@ -138,7 +140,7 @@ def test_equation_of_motion_matches_pinocchio_rnea(yumi, dyn):
 
 
 def test_momentum_and_coriolis_transpose_term(yumi, dyn):
-    """p = M q̇, and Cᵀq̇ is the transpose of the Christoffel matrix times q̇."""
+    """P = M q̇, and Cᵀq̇ is the transpose of the Christoffel matrix times q̇."""
     for q, qd in random_states(yumi, 5, seed=5):
         np.testing.assert_allclose(dyn.momentum(q, qd), dyn.mass(q) @ qd, atol=1e-15)
         np.testing.assert_allclose(
