@@ -177,7 +177,7 @@ class Joint:
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
-            raise check.fail("name", f"must be a non-empty string, got {self.name!r}")
+            raise check.fail("name", f"must be a non-empty string, got {check.short(self.name)}")
         if (self.dh is None) == (self.origin is None):
             raise check.fail("dh", "exactly one of 'dh' and 'origin' must place the joint")
         low, high = check.real_array("position_limits", self.position_limits, (2,))
@@ -219,6 +219,8 @@ class RobotDescription:
     gravity: FloatArray = field(default_factory=lambda: np.array([0.0, 0.0, -9.81]))
 
     def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            raise check.fail("name", f"must be a non-empty string, got {check.short(self.name)}")
         object.__setattr__(self, "joints", tuple(self.joints))
         if not self.joints:
             raise check.fail("joints", "a robot needs at least one joint")

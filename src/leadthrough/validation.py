@@ -32,16 +32,24 @@ def fail(field: str, reason: str) -> RobotDescriptionError:
     return RobotDescriptionError("robot description", field, reason)
 
 
+def short(value: object, limit: int = 60) -> str:
+    """One-line, length-limited text of a value for an error message."""
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    text = " ".join(repr(value).split())
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
 def real_array(field: str, value: ArrayLike, shape: tuple[int, ...]) -> NDArray[np.float64]:
     """Return ``value`` as a read-only finite float array of ``shape``."""
     try:
         array = np.array(value, dtype=float)
     except (TypeError, ValueError):
-        raise fail(field, f"expected numbers of shape {shape}, got {value!r}") from None
+        raise fail(field, f"expected numbers of shape {shape}, got {short(value)}") from None
     if array.shape != shape:
         raise fail(field, f"expected shape {shape}, got {array.shape}")
     if not np.all(np.isfinite(array)):
-        raise fail(field, f"must be finite, got {value!r}")
+        raise fail(field, f"must be finite, got {short(value)}")
     array.setflags(write=False)
     return array
 
@@ -49,7 +57,7 @@ def real_array(field: str, value: ArrayLike, shape: tuple[int, ...]) -> NDArray[
 def real(field: str, value: object, *, minimum: float | None = None, strict: bool = False) -> float:
     """Return ``value`` as a finite float, optionally bounded below (``strict``: ``>``)."""
     if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
-        raise fail(field, f"expected a number, got {value!r}")
+        raise fail(field, f"expected a number, got {short(value)}")
     number = float(value)
     if not np.isfinite(number):
         raise fail(field, f"must be finite, got {number}")

@@ -67,6 +67,8 @@ def load_robot(path: str | Path) -> RobotDescription:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except OSError as error:
         raise RobotDescriptionError(str(path), "", f"cannot read: {error.strerror}") from None
+    except UnicodeDecodeError:
+        raise RobotDescriptionError(str(path), "", "not a text file (UTF-8 expected)") from None
     except tomllib.TOMLDecodeError as error:
         raise RobotDescriptionError(str(path), "", f"not valid TOML: {error}") from None
     with within("", source=str(path)):

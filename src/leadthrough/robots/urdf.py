@@ -152,6 +152,9 @@ def _joint(
         axis = _REVOLUTE[kind]
     elif kind == "JointModelRevoluteUnaligned":
         axis = np.array(joint_model.extract().axis)
+    elif kind.startswith("JointModelRUB"):
+        reason = "continuous (unbounded) joint: give it <limit lower upper> as a revolute joint"
+        raise RobotDescriptionError("", "type", reason)
     else:
         raise RobotDescriptionError("", "type", f"only revolute joints are supported, got {kind}")
     v = joint_model.idx_v

@@ -1,0 +1,212 @@
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import leadthrough as lt
+
+PANDA = "panda_description/urdf/panda.urdf"
+UR5 = "ur_description/urdf/ur5_robot.urdf"
+
+#: (URDF under the robots directory, tip, joints the reference locks at neutral).
+ARMS = [
+    pytest.param(PANDA, "panda_hand", ("panda_finger_joint1", "panda_finger_joint2"), id="panda"),
+    pytest.param(UR5, "tool0", (), id="ur5-tool0"),
+    pytest.param(UR5, None, (), id="ur5-no-tip"),
+]
+
+TOLERANCE = 1e-9
+
+
+class Reference:
+    """Pinocchio built straight from the URDF, independently of leadthrough."""
+
+    def __init__(self, path: Path, tip: str | None, locked: tuple[str, ...]) -> None:
+        model = pin.buildModelFromUrdf(str(path))
+        if locked:
+            ids = [model.getJointId(name) for name in locked]
+            assert all(joint_id < model.njoints for joint_id in ids), locked
+            model = pin.buildReducedModel(model, ids, pin.neutral(model))
+        self.model = model
+        self.data = model.createData()
+        self.tip = tip
+
+    def gravity(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """G(q)."""
+        return pin.computeGeneralizedGravity(self.model, self.data, q).copy()
+
+    def mass(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """M(q), the upper triangle of crba symmetrized."""
+        upper = np.triu(pin.crba(self.model, self.data, q))
+        return upper + np.triu(upper, 1).T
+
+    def coriolis(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """C(q, q̇)."""
+        return pin.computeCoriolisMatrix(self.model, self.data, q, qd).copy()
+
+    def pose(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """World pose of the tip frame (of the last joint frame without a tip)."""
+        pin.framesForwardKinematics(self.model, self.data, q)
+        if self.tip is None:
+            return self.data.oMi[self.model.njoints - 1].homogeneous.copy()
+        return self.data.oMf[self.model.getFrameId(self.tip)].homogeneous.copy()
+
+
+QUANTITIES: dict[str, Callable[[lt.Dynamics, np.ndarray, np.ndarray], np.ndarray]] = {
+    "gravity": lambda dyn, q, qd: dyn.gravity(q),
+    "mass": lambda dyn, q, qd: dyn.mass(q),
+    "coriolis": lambda dyn, q, qd: dyn.coriolis(q, qd),
+    "pose": lambda dyn, q, qd: dyn.pose(q),
+}
+
+
+@pytest.mark.parametrize("quantity", list(QUANTITIES))
+@pytest.mark.parametrize(("urdf", "tip", "locked"), ARMS)
+def test_dynamics_match_pinocchio_from_urdf(robots_dir, urdf, tip, locked, quantity):
+    """Gravity, mass, Coriolis and tip pose of a URDF arm equal Pinocchio's on the raw URDF."""
+    robot = lt.robots.from_urdf(robots_dir / urdf, tip=tip)
+    dyn = lt.Dynamics(robot)
+    reference = Reference(robots_dir / urdf, tip, locked)
+    assert reference.model.nq == reference.model.nv == robot.n_joints
+    rng = np.random.default_rng(0)
+    for _ in range(5):
+        q = rng.uniform(robot.q_min, robot.q_max)
+        qd = rng.normal(size=robot.n_joints)
+        actual = QUANTITIES[quantity](dyn, q, qd)
+        expected = getattr(reference, quantity)(q, qd)
+        np.testing.assert_allclose(actual, expected, rtol=0, atol=TOLERANCE, err_msg=str(q))
+
+
+@pytest.mark.parametrize(("urdf", "tip", "locked"), ARMS)
+def test_joints_and_limits_match_urdf(robots_dir, urdf, tip, locked):
+    """Joint names, order and limits of a URDF arm are those of the URDF chain."""
+    robot = lt.robots.from_urdf(robots_dir / urdf, tip=tip)
+    model = Reference(robots_dir / urdf, tip, locked).model
+    assert robot.joint_names == tuple(model.names[1:])
+    assert not robot.uses_dh
+    np.testing.assert_array_equal(robot.q_min, model.lowerPositionLimit)
+    np.testing.assert_array_equal(robot.q_max, model.upperPositionLimit)
+    np.testing.assert_array_equal(robot.velocity_limits, model.velocityLimit)
+    np.testing.assert_array_equal(robot.torque_limits, model.effortLimit)
+    np.testing.assert_array_equal(robot.gear_ratios, np.ones(robot.n_joints))
+    np.testing.assert_array_equal(robot.rotor_inertias, np.zeros(robot.n_joints))
+
+
+# --- errors ----------------------------------------------------------------------------------
+
+
+def _error(path: Path, **kwargs) -> lt.RobotDescriptionError:
+    """The error from_urdf raises for ``path``, checked to be one line naming the file."""
+    with pytest.raises(lt.RobotDescriptionError) as info:
+        lt.robots.from_urdf(path, **kwargs)
+    message = str(info.value)
+    assert "\n" not in message
+    assert path.name in message
+    assert info.value.source == str(path)
+    return info.value
+
+
+def test_panda_without_tip_is_not_a_serial_chain(robots_dir):
+    """The panda without a tip fails: its two fingers branch off joint 7."""
+    error = _error(robots_dir / PANDA)
+    assert "not a serial chain" in str(error)
+    assert error.field == "tip"
+
+
+def test_unknown_tip_is_named(robots_dir):
+    """An unknown tip fails with an error naming the tip."""
+    error = _error(robots_dir / UR5, tip="no_such_link")
+    assert "'no_such_link'" in str(error)
+    assert error.field == "tip"
+
+
+MALFORMED = [
+    pytest.param("<robot name='broken'><link name='base'>\n", id="truncated-xml"),
+    pytest.param("this is not XML at all\n", id="not-xml"),
+    pytest.param("", id="empty"),
+]
+
+
+@pytest.mark.parametrize("text", MALFORMED)
+def test_malformed_urdf_names_the_file(tmp_path, text):
+    """A malformed URDF file fails with a one-line error naming the file."""
+    path = tmp_path / "broken_arm.urdf"
+    path.write_text(text, encoding="utf-8")
+    error = _error(path)
+    assert "not a valid URDF" in str(error)
+
+
+def test_missing_urdf_names_the_file(tmp_path):
+    """A URDF path that does not exist fails naming the file."""
+    error = _error(tmp_path / "absent_arm.urdf")
+    assert "no such file" in str(error)
+
+
+SLIDER_URDF = """<?xml version="1.0"?>
+<robot name="slider">
+  <link name="base"/>
+  <link name="link1">
+    <inertial>
+      <origin xyz="0 0 0.1"/>
+      <mass value="1.0"/>
+      <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/>
+    </inertial>
+  </link>
+  <link name="link2">
+    <inertial>
+      <origin xyz="0 0 0.1"/>
+      <mass value="0.5"/>
+      <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/>
+    </inertial>
+  </link>
+  <joint name="hinge" type="revolute">
+    <parent link="base"/>
+    <child link="link1"/>
+    <axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="10" velocity="1"/>
+  </joint>
+  <joint name="slide" type="{second}">
+    <parent link="link1"/>
+    <child link="link2"/>
+    <origin xyz="0 0 0.2"/>
+    <axis xyz="0 0 1"/>
+    <limit lower="0" upper="0.3" effort="10" velocity="1"/>
+  </joint>
+</robot>
+"""
+
+
+def test_two_revolute_links_load(tmp_path):
+    """The tiny two-link URDF loads when both joints are revolute (control for the next test)."""
+    path = tmp_path / "hinges.urdf"
+    path.write_text(SLIDER_URDF.format(second="revolute"), encoding="utf-8")
+    robot = lt.robots.from_urdf(path)
+    assert robot.joint_names == ("hinge", "slide")
+    np.testing.assert_array_equal(robot.masses, [1.0, 0.5])
+
+
+def test_prismatic_joint_in_chain_is_named(tmp_path):
+    """A chain with a prismatic joint fails naming that joint."""
+    path = tmp_path / "slider.urdf"
+    path.write_text(SLIDER_URDF.format(second="prismatic"), encoding="utf-8")
+    error = _error(path)
+    assert "slide" in error.field
+    assert "hinge" not in str(error)
+    assert "only revolute joints" in error.reason
+
+
+@pytest.mark.parametrize(
+    ("keyword", "values"),
+    [
+        pytest.param("gear_ratios", [100.0] * 5, id="gear_ratios-short"),
+        pytest.param("gear_ratios", [100.0] * 7, id="gear_ratios-long"),
+        pytest.param("rotor_inertias", [1e-6] * 5, id="rotor_inertias-short"),
+    ],
+)
+def test_per_joint_overrides_of_wrong_length_fail(robots_dir, keyword, values):
+    """gear_ratios or rotor_inertias with a length other than the chain's fail naming them."""
+    error = _error(robots_dir / UR5, tip="tool0", **{keyword: values})
+    assert error.field == keyword
+    assert "expected 6 values" in error.reason
