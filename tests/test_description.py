@@ -217,10 +217,12 @@ def test_scalar_properties_match_joints(yumi):
 
 
 def test_home_is_inside_the_limits(yumi):
-    """home() is zero clipped into the limits, so it always lies within [q_min, q_max]."""
+    """home() is the described home pose, else zero clipped into the limits."""
     home = yumi.home()
     assert np.all(yumi.q_min <= home) and np.all(home <= yumi.q_max)
-    np.testing.assert_array_equal(home, np.zeros(7))
+    np.testing.assert_array_equal(home, [-1.001, -0.869, 1.491, 0.072, 1.535, 0.668, 0.0])
+    home[0] = 9.0
+    assert yumi.home()[0] == -1.001
     limits = [(0.5, 1.0), (-2.0, -1.0), (-1.0, 1.0)]
     robot = lt.RobotDescription(
         "offset limits", tuple(_joint(f"j{i}", lim) for i, lim in enumerate(limits))
@@ -268,3 +270,9 @@ def test_nan_array_error_is_one_line():
     with pytest.raises(lt.RobotDescriptionError) as info:
         lt.LinkInertial(mass=1.0, com=[0.0, 0.0, 0.0], inertia=np.diag([1.0, np.nan, 1.0]))
     assert "\n" not in str(info.value)
+
+
+def test_home_outside_limits_is_rejected(yumi):
+    """A home pose outside the joint limits raises an error naming the joint."""
+    with pytest.raises(lt.RobotDescriptionError, match="home: joint_2 at 1 rad is outside"):
+        dataclasses.replace(yumi, home_position=[0.0, 1.0, 0, 0, 0, 0, 0])

@@ -210,6 +210,8 @@ class RobotDescription:
         base: Pose of the base frame (DH frame 0, or the chain root) in the world.
         flange: Flange frame in the last link frame (identity: the last DH frame).
         gravity: Gravity acceleration in the world frame [m/s²].
+        home_position: Joint readings of the home pose [rad], inside the limits
+            (default: zero, clipped into the limits).
     """
 
     name: str
@@ -217,6 +219,7 @@ class RobotDescription:
     base: Placement = field(default_factory=Placement)
     flange: Placement = field(default_factory=Placement)
     gravity: FloatArray = field(default_factory=lambda: np.array([0.0, 0.0, -9.81]))
+    home_position: FloatArray | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -230,6 +233,15 @@ class RobotDescription:
         if len(set(names)) != len(names):
             raise check.fail("joints", f"joint names must be unique, got {names}")
         object.__setattr__(self, "gravity", check.real_array("gravity", self.gravity, (3,)))
+        if self.home_position is not None:
+            home = check.real_array("home", self.home_position, (len(self.joints),))
+            outside = np.flatnonzero((home < self.q_min) | (home > self.q_max))
+            if outside.size:
+                joint = self.joints[outside[0]].name
+                raise check.fail(
+                    "home", f"{joint} at {home[outside[0]]:g} rad is outside its limits"
+                )
+            object.__setattr__(self, "home_position", home)
 
     @property
     def n_joints(self) -> int:
@@ -292,7 +304,9 @@ class RobotDescription:
         return float(np.sum(self.masses))
 
     def home(self) -> FloatArray:
-        """Joint readings of the home pose [rad]: zero, clipped into the limits."""
+        """Joint readings of the home pose [rad] (a fresh, writable array)."""
+        if self.home_position is not None:
+            return self.home_position.copy()
         return np.clip(np.zeros(self.n_joints), self.q_min, self.q_max)
 
     def _stack(self, get: Callable[[Joint], float]) -> FloatArray:

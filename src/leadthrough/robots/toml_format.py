@@ -4,6 +4,7 @@ Layout (every length in m, angle in rad, torque in Nm, arm side)::
 
     name = "My arm"
     gravity = [0.0, 0.0, -9.81]          # optional, world frame [m/s²]
+    home = [0.0, ...]                    # optional home pose, joint readings [rad]
     [base]                               # optional: xyz and rpy, or a 3×3 rotation
     xyz = [0.0, 0.0, 0.0]
     rotation = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]
@@ -77,7 +78,9 @@ def load_robot(path: str | Path) -> RobotDescription:
 
 def robot_from_dict(data: Mapping[str, Any]) -> RobotDescription:
     """Build a RobotDescription from the parsed TOML layout of this module."""
-    table = _keys(data, "", required={"name", "joints"}, optional={"gravity", "base", "flange"})
+    table = _keys(
+        data, "", required={"name", "joints"}, optional={"gravity", "base", "flange", "home"}
+    )
     joints_data = table["joints"]
     if not isinstance(joints_data, list) or not joints_data:
         raise fail("joints", "expected a non-empty array of [[joints]] tables")
@@ -92,6 +95,8 @@ def robot_from_dict(data: Mapping[str, Any]) -> RobotDescription:
                 kwargs[name] = _placement(table[name], optional={"xyz"})
     if "gravity" in table:
         kwargs["gravity"] = table["gravity"]
+    if "home" in table:
+        kwargs["home_position"] = table["home"]
     return RobotDescription(name=table["name"], joints=tuple(joints), **kwargs)
 
 
@@ -102,13 +107,13 @@ def save_robot(robot: RobotDescription, path: str | Path) -> None:
 
 def robot_to_dict(robot: RobotDescription) -> dict[str, Any]:
     """The TOML layout of ``robot`` as plain Python data."""
-    return {
-        "name": robot.name,
-        "gravity": robot.gravity.tolist(),
-        "base": _placement_dict(robot.base),
-        "flange": _placement_dict(robot.flange),
-        "joints": [_joint_dict(joint) for joint in robot.joints],
-    }
+    table: dict[str, Any] = {"name": robot.name, "gravity": robot.gravity.tolist()}
+    if robot.home_position is not None:
+        table["home"] = robot.home_position.tolist()
+    table["base"] = _placement_dict(robot.base)
+    table["flange"] = _placement_dict(robot.flange)
+    table["joints"] = [_joint_dict(joint) for joint in robot.joints]
+    return table
 
 
 def _keys(
