@@ -1,3 +1,7 @@
+import os
+
+os.environ.setdefault("MUJOCO_GL", "egl")  # before MuJoCo is first imported
+
 import sysconfig
 from pathlib import Path
 

@@ -32,3 +32,32 @@ class InputShapeError(LeadthroughError, ValueError):
         self.expected = expected
         self.got = got
         super().__init__(f"{name}: expected shape {expected}, got {got}")
+
+
+class OperatorError(LeadthroughError, ValueError):
+    """A parameter of the simulated operator (path, hand, torque profile) is invalid.
+
+    Attributes:
+        parameter: Name of the offending parameter, e.g. ``max_force``.
+        reason: What is wrong with it.
+    """
+
+    def __init__(self, parameter: str, reason: str) -> None:
+        self.parameter = parameter
+        self.reason = reason
+        super().__init__(f"{parameter}: {reason}")
+
+
+class FrictionParameterError(LeadthroughError, ValueError):
+    """A friction parameter is invalid (twin friction physics or its defaults).
+
+    Attributes:
+        parameter: Name of the offending parameter, with the joint index when it is per
+            joint, e.g. ``static[3]``.
+        reason: What is wrong with it.
+    """
+
+    def __init__(self, parameter: str, reason: str) -> None:
+        self.parameter = parameter
+        self.reason = reason
+        super().__init__(f"{parameter}: {reason}")

@@ -1,0 +1,110 @@
+"""Close the loop: a controller against the twin, every signal logged as arrays."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from leadthrough.description import FloatArray
+from leadthrough.interface import Controller, JointState
+from leadthrough.progress import Progress
+from leadthrough.twin.simulator import DigitalTwin
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+
+@dataclass(frozen=True, eq=False)
+class SimulationResult:
+    """Signals of a closed-loop run, one row per control period (N rows).
+
+    What the controller saw: ``t``, ``q``, ``qd``, ``tau_measured``; what it sent:
+    ``tau_command``. Ground truth: everything else (see :class:`~.simulator.Truth`).
+
+    Attributes:
+        t: Sample times [s], (N,).
+        q: Joint readings [rad], (N, n).
+        qd: Reported joint velocities [rad/s], (N, n).
+        tau_measured: Measured motor torque [Nm], (N, n).
+        tau_command: Commanded torque [Nm], (N, n).
+        q_true: True joint angles [rad], (N, n).
+        qd_true: True joint velocities [rad/s], (N, n).
+        tau_ext: True external joint torque [Nm], (N, n).
+        tau_operator: Operator's joint torque [Nm], (N, n).
+        operator_wrench: Hand wrench at the flange, world axes [N, Nm], (N, 6).
+        ft_wrench: Wrist sensor reading in the flange frame [N, Nm], (N, 6).
+        tau_motor: Motor torque that reached the joints [Nm], (N, n).
+        tau_friction: Friction torque [Nm], (N, n).
+        flange_position: Flange position in the world [m], (N, 3).
+    """
+
+    t: FloatArray
+    q: FloatArray
+    qd: FloatArray
+    tau_measured: FloatArray
+    tau_command: FloatArray
+    q_true: FloatArray
+    qd_true: FloatArray
+    tau_ext: FloatArray
+    tau_operator: FloatArray
+    operator_wrench: FloatArray
+    ft_wrench: FloatArray
+    tau_motor: FloatArray
+    tau_friction: FloatArray
+    flange_position: FloatArray
+
+    @property
+    def operator_force(self) -> FloatArray:
+        """Norm of the hand force [N], (N,)."""
+        return np.linalg.norm(self.operator_wrench[:, :3], axis=1)
+
+    def plot(self, joints: list[int] | None = None) -> Figure:
+        """Figure of joint angles, torques and the operator force (see ``twin.plots``)."""
+        from leadthrough.twin.plots import plot_simulation
+
+        return plot_simulation(self, joints)
+
+
+def simulate(
+    twin: DigitalTwin, controller: Controller, duration: float, progress: bool | None = None
+) -> SimulationResult:
+    """Run ``controller`` against ``twin`` for ``duration`` seconds of simulated time.
+
+    Each period: read the state, ask the controller, send the command; the twin
+    simulates the period. ``progress`` shows a bar (default: when stderr is a terminal
+    and the run is longer than 10 s).
+    """
+    periods = round(duration / twin.dt)
+    log: dict[str, list] = {field.name: [] for field in fields(SimulationResult)}
+    bar = Progress(duration, "simulating", enabled=progress if progress is not None else None)
+    bar.enabled = bar.enabled and (progress is True or duration > 10.0)
+    for k in range(periods):
+        state = twin.read_state()
+        command = controller.step(state.q, state.qd, state.tau_measured)
+        _record(log, state, command, twin)
+        twin.send_torque(command)
+        bar.update(k * twin.dt)
+    bar.close()
+    return SimulationResult(**{name: np.array(values) for name, values in log.items()})
+
+
+def _record(
+    log: dict[str, list], state: JointState, command: FloatArray, twin: DigitalTwin
+) -> None:
+    truth = twin.truth
+    log["t"].append(state.t)
+    log["q"].append(state.q)
+    log["qd"].append(state.qd)
+    log["tau_measured"].append(state.tau_measured)
+    log["tau_command"].append(np.array(command, dtype=float))
+    log["q_true"].append(truth.q)
+    log["qd_true"].append(truth.qd)
+    log["tau_ext"].append(truth.tau_ext)
+    log["tau_operator"].append(truth.tau_operator)
+    log["operator_wrench"].append(truth.operator_wrench)
+    log["ft_wrench"].append(truth.ft_wrench)
+    log["tau_motor"].append(truth.tau_motor)
+    log["tau_friction"].append(truth.tau_friction)
+    log["flange_position"].append(truth.flange_pose[:3, 3])
