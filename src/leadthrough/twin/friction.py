@@ -52,8 +52,10 @@ displacement (the textbook value): with the YuMi defaults τ_S / σ0 is 1.6e-5 t
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -261,6 +263,22 @@ class TwinFrictionParameters:
         )
 
 
+@numba.njit(cache=True)
+def _lugre_step(q, v, coulomb, cable_gain, inv_width, neutral_scaled, excess, neg_inv_vs2,
+                neg_sigma0_dt, rate_gain, viscous, bristle_torque, base, out):  # fmt: skip  # noqa: ANN001, ANN202
+    """One exact bristle step per joint (see the module docstring), compiled: ~1 µs for 7 joints.
+
+    ``bristle_torque`` (σ0 z) is advanced in place; ``out`` receives ``base − τ_f`` [Nm].
+    """
+    for i in range(q.shape[0]):
+        level = (coulomb[i] + cable_gain[i] * math.tanh(q[i] * inv_width[i] - neutral_scaled[i])
+                 + excess[i] * math.exp(v[i] * v[i] * neg_inv_vs2[i]))  # fmt: skip
+        decay = math.expm1(abs(v[i]) * neg_sigma0_dt[i] / level)  # exp(−σ0 |v| dt / g) − 1
+        change = (math.copysign(level, v[i]) - bristle_torque[i]) * decay  # −σ0 (z⁺ − z)
+        bristle_torque[i] -= change
+        out[i] = base[i] + rate_gain[i] * change - bristle_torque[i] - viscous[i] * v[i]
+
+
 class LuGreFriction:
     """LuGre joint friction with its bristle state, stepped at a fixed ``dt``.
 
@@ -292,9 +310,7 @@ class LuGreFriction:
         self._rate_gain = params.bristle_damping / (params.bristle_stiffness * self._dt)
         self._viscous = params.viscous.copy()
         self._bristle_torque = np.zeros(n)  # σ0 z [Nm]
-        self._level = np.empty(n)
-        self._work = np.empty(n)
-        self._decay = np.empty(n)
+        self._zeros = np.zeros(n)
 
     @property
     def params(self) -> TwinFrictionParameters:
@@ -333,30 +349,19 @@ class LuGreFriction:
         if q.shape != self._shape or v.shape != self._shape:
             bad, name = (q, "q") if q.shape != self._shape else (v, "qd")
             raise InputShapeError(name, self._shape, bad.shape)
-        level, work, decay, y = self._level, self._work, self._decay, self._bristle_torque
-        np.multiply(q, self._inv_width, out=level)  # g = τ_C(q) + Stribeck excess
-        level -= self._neutral_scaled
-        np.tanh(level, out=level)
-        level *= self._cable_gain
-        level += self._coulomb
-        np.multiply(v, v, out=work)
-        work *= self._neg_inv_vs2
-        np.exp(work, out=work)
-        work *= self._excess
-        level += work
-        np.abs(v, out=decay)  # decay = exp(−σ0 |v| dt / g) − 1
-        decay *= self._neg_sigma0_dt
-        decay /= level
-        np.expm1(decay, out=decay)
-        np.copysign(level, v, out=work)  # σ0 z_ss = g sign(v)
-        work -= y
-        work *= decay  # −σ0 (z⁺ − z)
-        y -= work
-        out = self._rate_gain * work
-        out -= y
-        np.multiply(self._viscous, v, out=level)
-        out -= level
+        out = np.empty(self._shape)
+        self.add_torque(q, v, self._zeros, out)
         return out
+
+    def add_torque(self, q: FloatArray, qd: FloatArray, base: FloatArray, out: FloatArray) -> None:
+        """Fast path of :meth:`torque` for the simulator: ``out = base + friction torque``.
+
+        No checks: all arguments are float64 arrays of shape (n,); ``out`` may be a MuJoCo
+        buffer such as ``qfrc_applied``. Advances the bristles by ``dt``.
+        """
+        _lugre_step(q, qd, self._coulomb, self._cable_gain, self._inv_width,
+                    self._neutral_scaled, self._excess, self._neg_inv_vs2, self._neg_sigma0_dt,
+                    self._rate_gain, self._viscous, self._bristle_torque, base, out)  # fmt: skip
 
     def steady_state(self, qd: ArrayLike, q: ArrayLike) -> FloatArray:
         """Friction torque applied at constant sliding velocity: −(g(q̇, q) sign(q̇) + c q̇).

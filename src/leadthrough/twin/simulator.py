@@ -148,6 +148,9 @@ class DigitalTwin(RobotInterface):
         self.sensors = Sensors(robot, self.config.sensors, self._sensor_rng)
         self.drives = Drives(self.true_robot, self.config.sensors)
         self.friction = LuGreFriction(self._friction_parameters(), self.config.physics_dt)
+        self._qpos, self._qvel = self.data.qpos, self.data.qvel  # views, valid for data's life
+        self._joint_torque = np.zeros(self.n_joints)
+        self._ft_noise = np.repeat(self.config.ft_noise_std, 3)
         self._flange_site = self.model.site(FLANGE_SITE).id
         self._flange_body = self.model.site_bodyid[self._flange_site]
         self._tool_geom = self.model.geom(TOOL_GEOM).id
@@ -176,6 +179,16 @@ class DigitalTwin(RobotInterface):
             dt=self.config.physics_dt,
             scale=self.config.model_error.friction_scale,
         )
+
+    @property
+    def operator(self) -> Operator:
+        """Who touches the arm; may be replaced between periods."""
+        return self._operator
+
+    @operator.setter
+    def operator(self, operator: Operator) -> None:
+        self._operator = operator
+        self._operator_acts = type(operator) is not Operator
 
     # --- the robot interface -------------------------------------------------------------
 
@@ -213,7 +226,7 @@ class DigitalTwin(RobotInterface):
         tau = np.asarray(tau, dtype=float)
         if tau.shape != (self.n_joints,):
             raise InputShapeError("tau", (self.n_joints,), tau.shape)
-        if not np.all(np.isfinite(tau)):
+        if not np.isfinite(tau.sum()):  # one reduction: any NaN or ±Inf makes the sum non-finite
             raise TwinError(f"non-finite torque command {tau}")
         self._pending.append(tau.copy())
         command = self._pending.popleft() if self.config.delay_periods else self._pending.pop()
@@ -222,47 +235,46 @@ class DigitalTwin(RobotInterface):
     # --- one control period of physics ---------------------------------------------------
 
     def _simulate_period(self, command: FloatArray) -> None:
+        """Hold the motor and operator torques for one period; friction acts every step."""
         tau_operator, wrench = self._operator_torque()
-        self._tau_motor = self.drives.applied(command, self.data.qpos)
+        self._tau_motor = self.drives.applied(command, self._qpos)
+        np.add(self._tau_motor, tau_operator, out=self._joint_torque)
         applied = self.data.qfrc_applied
-        friction = np.zeros(self.n_joints)
         for _ in range(self.config.substeps):
-            friction = self.friction.torque(self.data.qpos, self.data.qvel)
-            np.add(self._tau_motor, friction, out=applied)
-            applied += tau_operator
+            self.friction.add_torque(self._qpos, self._qvel, self._joint_torque, applied)
             mujoco.mj_step(self.model, self.data)
-        if not np.all(np.isfinite(self.data.qpos)):
+        if not np.isfinite(self._qpos.sum()):
             raise TwinError(f"the simulation diverged at t = {self.time:.3f} s")
         self.time += self.config.control_dt
-        self.truth = self._sample_truth(tau_operator, wrench, friction)
+        self.truth = self._sample_truth(tau_operator, wrench, applied - self._joint_torque)
+
+    def _flange_pose(self) -> FloatArray:
+        pose = np.eye(4)
+        pose[:3, :3] = self.data.site_xmat[self._flange_site].reshape(3, 3)
+        pose[:3, 3] = self.data.site_xpos[self._flange_site]
+        return pose
 
     def _operator_torque(self) -> tuple[FloatArray, FloatArray]:
         """Joint torque of the operator for this period, and the hand wrench [N, Nm]."""
-        data = self.data
-        pose = np.eye(4)
-        pose[:3, :3] = data.site_xmat[self._flange_site].reshape(3, 3)
-        pose[:3, 3] = data.site_xpos[self._flange_site]
-        mujoco.mj_jacSite(self.model, data, self._jacobian[:3], self._jacobian[3:],
-                          self._flange_site)  # fmt: skip
-        velocity = self._jacobian @ data.qvel
-        wrench = np.asarray(self.operator.wrench(self.time, pose, velocity), dtype=float)
-        tau = self._jacobian.T @ wrench
-        tau += np.asarray(self.operator.joint_torque(self.time, data.qpos, data.qvel), dtype=float)
+        if not self._operator_acts:
+            return np.zeros(self.n_joints), np.zeros(6)
+        jacobian = self._jacobian
+        mujoco.mj_jacSite(self.model, self.data, jacobian[:3], jacobian[3:], self._flange_site)
+        velocity = jacobian @ self._qvel
+        wrench = np.asarray(self.operator.wrench(self.time, self._flange_pose(), velocity), float)
+        tau = jacobian.T @ wrench
+        tau += np.asarray(self.operator.joint_torque(self.time, self._qpos, self._qvel), float)
         return tau, wrench
 
     def _sample_truth(
         self, tau_operator: FloatArray, wrench: FloatArray, friction: FloatArray
     ) -> Truth:
         data = self.data
-        pose = np.eye(4)
-        pose[:3, :3] = data.site_xmat[self._flange_site].reshape(3, 3)
-        pose[:3, 3] = data.site_xpos[self._flange_site]
-        contact_wrench = self._tool_contact_wrench(pose[:3, 3])
-        external = wrench + contact_wrench
+        pose = self._flange_pose()
+        external = wrench + self._tool_contact_wrench(pose[:3, 3]) if data.ncon else wrench
         rotation_t = pose[:3, :3].T
-        noise_f, noise_m = self.config.ft_noise_std
         ft = np.concatenate([rotation_t @ external[:3], rotation_t @ external[3:]])
-        ft += self._sensor_rng.normal(0.0, 1.0, 6) * np.repeat([noise_f, noise_m], 3)
+        ft += self._sensor_rng.normal(0.0, 1.0, 6) * self._ft_noise
         return Truth(
             q=data.qpos.copy(),
             qd=data.qvel.copy(),
@@ -271,7 +283,7 @@ class DigitalTwin(RobotInterface):
             operator_wrench=wrench.copy(),
             ft_wrench=ft,
             tau_motor=self._tau_motor.copy(),
-            tau_friction=np.array(friction, dtype=float),
+            tau_friction=friction,
             flange_pose=pose,
         )
 
