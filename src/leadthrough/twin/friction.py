@@ -265,7 +265,7 @@ class TwinFrictionParameters:
 
 @numba.njit(cache=True)
 def _lugre_step(q, v, coulomb, cable_gain, inv_width, neutral_scaled, excess, neg_inv_vs2,
-                neg_sigma0_dt, rate_gain, viscous, bristle_torque, base, out):  # fmt: skip  # noqa: ANN001, ANN202
+                neg_sigma0_dt, rate_gain, viscous, bristle_torque, base, out):  # fmt: skip
     """One exact bristle step per joint (see the module docstring), compiled: ~1 µs for 7 joints.
 
     ``bristle_torque`` (σ0 z) is advanced in place; ``out`` receives ``base − τ_f`` [Nm].
