@@ -34,22 +34,8 @@ class InputShapeError(LeadthroughError, ValueError):
         super().__init__(f"{name}: expected shape {expected}, got {got}")
 
 
-class OperatorError(LeadthroughError, ValueError):
-    """A parameter of the simulated operator (path, hand, torque profile) is invalid.
-
-    Attributes:
-        parameter: Name of the offending parameter, e.g. ``max_force``.
-        reason: What is wrong with it.
-    """
-
-    def __init__(self, parameter: str, reason: str) -> None:
-        self.parameter = parameter
-        self.reason = reason
-        super().__init__(f"{parameter}: {reason}")
-
-
-class FrictionParameterError(LeadthroughError, ValueError):
-    """A friction parameter is invalid (twin friction physics or its defaults).
+class ParameterError(LeadthroughError, ValueError):
+    """A parameter of a component (simulator, operator, controller) is invalid.
 
     Attributes:
         parameter: Name of the offending parameter, with the joint index when it is per
@@ -61,3 +47,11 @@ class FrictionParameterError(LeadthroughError, ValueError):
         self.parameter = parameter
         self.reason = reason
         super().__init__(f"{parameter}: {reason}")
+
+
+class OperatorError(ParameterError):
+    """A parameter of the simulated operator (path, hand, torque profile) is invalid."""
+
+
+class FrictionParameterError(ParameterError):
+    """A friction parameter is invalid (twin friction physics or its defaults)."""

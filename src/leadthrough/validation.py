@@ -8,7 +8,7 @@ one line that names the file and the field.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 import numpy as np
@@ -40,30 +40,43 @@ def short(value: object, limit: int = 60) -> str:
     return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
-def real_array(field: str, value: ArrayLike, shape: tuple[int, ...]) -> NDArray[np.float64]:
+#: Makes the exception for (field, reason); each component passes its own error class.
+ErrorFactory = Callable[[str, str], Exception]
+
+
+def real_array(
+    field: str, value: ArrayLike, shape: tuple[int, ...], error: ErrorFactory = fail
+) -> NDArray[np.float64]:
     """Return ``value`` as a read-only finite float array of ``shape``."""
     try:
         array = np.array(value, dtype=float)
     except (TypeError, ValueError):
-        raise fail(field, f"expected numbers of shape {shape}, got {short(value)}") from None
+        raise error(field, f"expected numbers of shape {shape}, got {short(value)}") from None
     if array.shape != shape:
-        raise fail(field, f"expected shape {shape}, got {array.shape}")
+        raise error(field, f"expected shape {shape}, got {array.shape}")
     if not np.all(np.isfinite(array)):
-        raise fail(field, f"must be finite, got {short(value)}")
+        raise error(field, f"must be finite, got {short(value)}")
     array.setflags(write=False)
     return array
 
 
-def real(field: str, value: object, *, minimum: float | None = None, strict: bool = False) -> float:
+def real(
+    field: str,
+    value: object,
+    *,
+    minimum: float | None = None,
+    strict: bool = False,
+    error: ErrorFactory = fail,
+) -> float:
     """Return ``value`` as a finite float, optionally bounded below (``strict``: ``>``)."""
     if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
-        raise fail(field, f"expected a number, got {short(value)}")
+        raise error(field, f"expected a number, got {short(value)}")
     number = float(value)
     if not np.isfinite(number):
-        raise fail(field, f"must be finite, got {number}")
+        raise error(field, f"must be finite, got {number}")
     if minimum is not None and (number <= minimum if strict else number < minimum):
         relation = ">" if strict else ">="
-        raise fail(field, f"must be {relation} {minimum:g}, got {number:g}")
+        raise error(field, f"must be {relation} {minimum:g}, got {number:g}")
     return number
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from leadthrough import validation
 from leadthrough.errors import InputShapeError, OperatorError
 
 FloatArray = NDArray[np.float64]
@@ -12,29 +13,12 @@ FloatArray = NDArray[np.float64]
 
 def real(name: str, value: object, *, minimum: float | None = None, strict: bool = False) -> float:
     """Return ``value`` as a finite float, optionally bounded below (``strict``: ``>``)."""
-    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
-        raise OperatorError(name, f"expected a number, got {value!r}")
-    number = float(value)
-    if not np.isfinite(number):
-        raise OperatorError(name, f"must be finite, got {number}")
-    if minimum is not None and (number <= minimum if strict else number < minimum):
-        relation = ">" if strict else ">="
-        raise OperatorError(name, f"must be {relation} {minimum:g}, got {number:g}")
-    return number
+    return validation.real(name, value, minimum=minimum, strict=strict, error=OperatorError)
 
 
 def vector(name: str, value: ArrayLike, size: int = 3) -> FloatArray:
     """Return ``value`` as a read-only finite float array of shape ``(size,)``."""
-    try:
-        array = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise OperatorError(name, f"expected {size} numbers, got {value!r}") from None
-    if array.shape != (size,):
-        raise OperatorError(name, f"expected shape ({size},), got {array.shape}")
-    if not np.all(np.isfinite(array)):
-        raise OperatorError(name, "must be finite")
-    array.setflags(write=False)
-    return array
+    return validation.real_array(name, value, (size,), error=OperatorError)
 
 
 def index(name: str, value: object) -> int:

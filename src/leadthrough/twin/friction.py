@@ -61,6 +61,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from leadthrough.description import RobotDescription
 from leadthrough.errors import FrictionParameterError, InputShapeError
+from leadthrough.validation import real
 
 FloatArray = NDArray[np.float64]
 
@@ -406,15 +407,7 @@ def _check_all(
 
 
 def _number(name: str, value: object, minimum: float, *, strict: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
-        raise FrictionParameterError(name, f"expected a number, got {value!r}")
-    number = float(value)
-    if not np.isfinite(number) or (number <= minimum if strict else number < minimum):
-        relation = ">" if strict else "≥"
-        raise FrictionParameterError(
-            name, f"must be finite and {relation} {minimum:g}, got {number}"
-        )
-    return number
+    return real(name, value, minimum=minimum, strict=strict, error=FrictionParameterError)
 
 
 def _positive(name: str, value: ArrayLike) -> FloatArray:
