@@ -9,6 +9,10 @@ STAMP := $(VENV)/.installed-stamp
 .PHONY: demo test bench lint format clean
 
 $(STAMP): pyproject.toml
+	@# Offscreen rendering of the twin needs EGL (Debian: libegl1, libgl1-mesa-dri).
+	@ldconfig -p | grep -q libEGL.so.1 || { [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null \
+		&& apt-get update -qq && apt-get install -y -qq libegl1 libgl1-mesa-dri; } \
+		|| echo "note: no EGL library: pictures of the arm will be skipped"
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[dev]'

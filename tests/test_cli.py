@@ -47,3 +47,13 @@ def test_help_has_examples(args):
     )
     assert result.returncode == 0
     assert "usage: leadthrough" in result.stdout
+
+
+def test_simulate_writes_plot_and_picture(tmp_path, capsys):
+    """`leadthrough simulate` runs a scenario and writes its plot (and picture when GL works)."""
+    assert (
+        main(["simulate", "--scenario", "joint", "--duration", "0.5", "--out", str(tmp_path)]) == 0
+    )
+    out = capsys.readouterr().out
+    assert "scenario joint" in out and "real time" in out
+    assert (tmp_path / "joint.png").stat().st_size > 10_000

@@ -33,6 +33,23 @@ def _info(args: argparse.Namespace) -> int:
     return 0
 
 
+_EPILOG_SIMULATE = """examples:
+  leadthrough simulate                          # a hand pulls the YuMi's tool along a line
+  leadthrough simulate --scenario table_push --out results/
+  leadthrough simulate --scenario joint --duration 6 --seed 3
+"""
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    from leadthrough.twin.session import run_scenario
+
+    summary = run_scenario(
+        robots.load(args.robot, tip=args.tip), args.scenario, args.duration, args.seed, args.out
+    )
+    print(summary)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand."""
     parser = argparse.ArgumentParser(
@@ -49,6 +66,22 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_robot_arguments(info)
     info.set_defaults(run=_info)
+    simulate = commands.add_parser(
+        "simulate",
+        help="run a twin scenario with gravity feed-forward",
+        description="Run a shipped scenario of the digital twin under gravity feed-forward and"
+        " write a plot of the run and a rendered picture of the arm.",
+        epilog=_EPILOG_SIMULATE,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    _add_robot_arguments(simulate)
+    from leadthrough.twin.scenarios import SCENARIOS
+
+    simulate.add_argument("--scenario", default="line", choices=sorted(SCENARIOS))
+    simulate.add_argument("--duration", type=float, help="simulated seconds (default: scenario's)")
+    simulate.add_argument("--seed", type=int, default=0, help="seed of every random draw")
+    simulate.add_argument("--out", default="out", help="directory for the figures (default: out)")
+    simulate.set_defaults(run=_simulate)
     return parser
 
 

@@ -117,6 +117,8 @@ def mjcf_from_description(
 
 def _assets(root: ElementTree.Element) -> None:
     asset = _sub(root, "asset")
+    _sub(asset, "texture", type="skybox", builtin="gradient", rgb1="0.55 0.65 0.8",
+         rgb2="0.1 0.1 0.15", width="256", height="256")  # fmt: skip
     _sub(asset, "material", name="link", rgba="0.85 0.85 0.88 1")
     _sub(asset, "material", name="joint", rgba="0.9 0.45 0.1 1")
     _sub(asset, "material", name="base", rgba="0.3 0.3 0.35 1")
