@@ -1,4 +1,4 @@
-"""Run a shipped scenario end to end: simulate, plot, render, summarise (``leadthrough simulate``)."""
+"""Run a shipped scenario end to end: simulate, plot, render, summarise; `leadthrough simulate`."""
 
 from __future__ import annotations
 
