@@ -53,7 +53,9 @@ displacement (the textbook value): with the YuMi defaults τ_S / σ0 is 1.6e-5 t
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, fields
+from functools import partial
 
 import numba
 import numpy as np
@@ -355,14 +357,25 @@ class LuGreFriction:
         return out
 
     def add_torque(self, q: FloatArray, qd: FloatArray, base: FloatArray, out: FloatArray) -> None:
-        """Fast path of :meth:`torque` for the simulator: ``out = base + friction torque``.
+        """Fast path of :meth:`torque`: ``out = base + friction torque``, bristles advanced.
 
         No checks: all arguments are float64 arrays of shape (n,); ``out`` may be a MuJoCo
-        buffer such as ``qfrc_applied``. Advances the bristles by ``dt``.
+        buffer such as ``qfrc_applied``.
         """
-        _lugre_step(q, qd, self._coulomb, self._cable_gain, self._inv_width,
-                    self._neutral_scaled, self._excess, self._neg_inv_vs2, self._neg_sigma0_dt,
-                    self._rate_gain, self._viscous, self._bristle_torque, base, out)  # fmt: skip
+        self.bind(q, qd, base, out)()
+
+    def bind(
+        self, q: FloatArray, qd: FloatArray, base: FloatArray, out: FloatArray
+    ) -> Callable[[], None]:
+        """A call-with-no-arguments :meth:`add_torque` on these (persistent) buffers.
+
+        For the simulator's 2 kHz loop, where ``q``, ``qd`` (MuJoCo's state views), ``base``
+        and ``out`` are the same arrays every step: it saves the argument handling.
+        """
+        return partial(_lugre_step, q, qd, self._coulomb, self._cable_gain, self._inv_width,
+                       self._neutral_scaled, self._excess, self._neg_inv_vs2,
+                       self._neg_sigma0_dt, self._rate_gain, self._viscous,
+                       self._bristle_torque, base, out)  # fmt: skip
 
     def steady_state(self, qd: ArrayLike, q: ArrayLike) -> FloatArray:
         """Friction torque applied at constant sliding velocity: −(g(q̇, q) sign(q̇) + c q̇).

@@ -155,6 +155,9 @@ class DigitalTwin(RobotInterface):
         self._flange_body = self.model.site_bodyid[self._flange_site]
         self._tool_geom = self.model.geom(TOOL_GEOM).id
         self._jacobian = np.zeros((6, self.n_joints))
+        self._friction_step = self.friction.bind(
+            self._qpos, self._qvel, self._joint_torque, self.data.qfrc_applied
+        )
         self.reset(q0)
 
     def _build_physics(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
@@ -239,10 +242,16 @@ class DigitalTwin(RobotInterface):
         tau_operator, wrench = self._operator_torque()
         self._tau_motor = self.drives.applied(command, self._qpos)
         np.add(self._tau_motor, tau_operator, out=self._joint_torque)
-        applied = self.data.qfrc_applied
+        model, data, friction_step, physics_step = (
+            self.model,
+            self.data,
+            self._friction_step,
+            mujoco.mj_step,
+        )
         for _ in range(self.config.substeps):
-            self.friction.add_torque(self._qpos, self._qvel, self._joint_torque, applied)
-            mujoco.mj_step(self.model, self.data)
+            friction_step()  # qfrc_applied = motor + operator + friction
+            physics_step(model, data)
+        applied = data.qfrc_applied
         if not np.isfinite(self._qpos.sum()):
             raise TwinError(f"the simulation diverged at t = {self.time:.3f} s")
         self.time += self.config.control_dt
