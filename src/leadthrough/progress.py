@@ -30,6 +30,12 @@ class Progress:
         self.enabled = self.stream.isatty() if enabled is None else enabled
         self._start = time.perf_counter()
         self._last = -1.0
+        self.done = 0.0
+
+    def advance(self, amount: float) -> None:
+        """Add ``amount`` units of finished work and redraw (throttled)."""
+        self.done += amount
+        self.update(self.done)
 
     def update(self, done: float) -> None:
         """Redraw the bar for ``done`` units finished (throttled to 5 Hz)."""

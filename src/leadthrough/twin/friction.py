@@ -54,7 +54,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from functools import partial
 
 import numba
@@ -62,6 +62,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from leadthrough.description import RobotDescription
+from leadthrough.dynamics import Dynamics
 from leadthrough.errors import FrictionParameterError, InputShapeError
 from leadthrough.validation import real
 
@@ -112,6 +113,45 @@ def stable_bristle_damping(
     stiffness = np.asarray(stiffness, dtype=float)
     critical = 2.0 * damping_ratio * np.sqrt(stiffness * inertia)
     return np.minimum(critical, max_step_ratio * inertia / _positive("dt", dt))
+
+
+def smallest_effective_inertia(robot: RobotDescription, samples: int = 64) -> FloatArray:
+    """Per joint, the smallest inertia ``1 / (M⁻¹)ᵢᵢ`` over seeded random poses [kg m²].
+
+    It is what joint i feels when all other joints are free; the bristle stiffness of
+    the true friction is chosen against it so that the explicit 2 kHz step is stable.
+    Never below the reflected rotor inertia ``G_r² J_m``.
+    """
+    dynamics = Dynamics(robot)
+    poses = np.random.default_rng(0).uniform(robot.q_min, robot.q_max, (samples, robot.n_joints))
+    inverse_diagonals = np.array([np.diag(np.linalg.inv(dynamics.mass(q))) for q in poses])
+    return 1.0 / inverse_diagonals.max(axis=0)
+
+
+def randomized_friction(
+    robot: RobotDescription, rng: np.random.Generator, dt: float = 0.0005
+) -> TwinFrictionParameters:
+    """True friction drawn around the description's, for tests that nothing is tuned to one set.
+
+    Per joint τ_C and c are scaled by U(0.5, 1.5); for the whole arm the static ratio is
+    U(1.1, 1.6), the Stribeck velocity U(0.003, 0.03) rad/s and the cable amplitude U(0, 0.25).
+    """
+    n = robot.n_joints
+    joints = []
+    for joint, k_coulomb, k_viscous in zip(robot.joints, rng.uniform(0.5, 1.5, n),
+                                           rng.uniform(0.5, 1.5, n), strict=True):  # fmt: skip
+        friction = replace(joint.friction, coulomb=joint.friction.coulomb * k_coulomb,
+                           viscous=joint.friction.viscous * k_viscous)  # fmt: skip
+        joints.append(replace(joint, friction=friction))
+    scaled = replace(robot, joints=tuple(joints))
+    return TwinFrictionParameters.from_robot(
+        scaled,
+        static_ratio=rng.uniform(1.1, 1.6),
+        stribeck_velocity=rng.uniform(0.003, 0.03),
+        cable_amplitude=rng.uniform(0.0, 0.25),
+        inertia=smallest_effective_inertia(robot),
+        dt=dt,
+    )
 
 
 @dataclass(frozen=True, eq=False)

@@ -18,25 +18,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from leadthrough.errors import OperatorError
+from leadthrough.trajectories import minimum_jerk_phase
 from leadthrough.twin import _checks as check
 
 FloatArray = NDArray[np.float64]
-
-
-def minimum_jerk_phase(t: ArrayLike, duration: float) -> tuple[FloatArray, FloatArray]:
-    """Minimum-jerk phase and its rate, clamped outside ``[0, duration]``.
-
-    Args:
-        t: Time(s) [s].
-        duration: Duration of the motion [s], > 0.
-
-    Returns:
-        The phase ``s ∈ [0, 1]`` [-] and its rate ``ṡ`` [1/s], each of the shape of ``t``.
-    """
-    tau = np.clip(np.asarray(t, dtype=float) / duration, 0.0, 1.0)
-    phase = tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
-    rate = 30.0 * tau**2 * (1.0 - tau) ** 2 / duration
-    return phase, rate
 
 
 def _set(instance: object, name: str, value: object) -> None:

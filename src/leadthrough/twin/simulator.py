@@ -22,10 +22,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from leadthrough.description import FloatArray, RobotDescription
-from leadthrough.dynamics import Dynamics
 from leadthrough.errors import InputShapeError, LeadthroughError
 from leadthrough.interface import JointState, RobotInterface
-from leadthrough.twin.friction import LuGreFriction, TwinFrictionParameters
+from leadthrough.twin.friction import (
+    LuGreFriction,
+    TwinFrictionParameters,
+    smallest_effective_inertia,
+)
 from leadthrough.twin.mjcf import FLANGE_SITE, TOOL_GEOM, TableSurface, mjcf_from_description
 from leadthrough.twin.model_error import ModelError, perturbed_robot
 from leadthrough.twin.operator import Operator
@@ -104,19 +107,6 @@ class Truth:
     tau_motor: FloatArray
     tau_friction: FloatArray
     flange_pose: FloatArray
-
-
-def smallest_effective_inertia(robot: RobotDescription, samples: int = 64) -> FloatArray:
-    """Per joint, the smallest inertia ``1 / (M⁻¹)ᵢᵢ`` over seeded random poses [kg m²].
-
-    It is what joint i feels when all other joints are free; the bristle stiffness of
-    the true friction is chosen against it so that the explicit 2 kHz step is stable.
-    Never below the reflected rotor inertia ``G_r² J_m``.
-    """
-    dynamics = Dynamics(robot)
-    poses = np.random.default_rng(0).uniform(robot.q_min, robot.q_max, (samples, robot.n_joints))
-    inverse_diagonals = np.array([np.diag(np.linalg.inv(dynamics.mass(q))) for q in poses])
-    return 1.0 / inverse_diagonals.max(axis=0)
 
 
 class DigitalTwin(RobotInterface):

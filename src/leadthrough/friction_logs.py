@@ -1,0 +1,83 @@
+"""Excitation logs on disk: NPZ or CSV, one file holding one or more runs.
+
+Both formats carry the same columns: ``run`` (an integer per sample naming the run),
+``t`` [s], then per joint ``q{i}`` [rad], ``qd{i}`` [rad/s], ``tau{i}`` [Nm, arm side]
+(i = 1…n). In NPZ the arrays are ``run`` (N,), ``t`` (N,), ``q``, ``qd``, ``tau`` (N, n).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from leadthrough.errors import LeadthroughError
+
+
+class LogFileError(LeadthroughError, ValueError):
+    """A log file cannot be read as excitation logs."""
+
+
+def save_logs(logs: Sequence, path: str | Path) -> Path:
+    """Write logs (objects or mappings with t, q, qd, tau) to ``.npz`` or ``.csv``."""
+    path = Path(path)
+    arrays = _stack(logs)
+    if path.suffix == ".npz":
+        np.savez_compressed(path, **arrays)
+    elif path.suffix == ".csv":
+        n = arrays["q"].shape[1]
+        header = ["run", "t"] + [f"{k}{i + 1}" for k in ("q", "qd", "tau") for i in range(n)]
+        table = np.column_stack(
+            [arrays["run"], arrays["t"], arrays["q"], arrays["qd"], arrays["tau"]]
+        )
+        np.savetxt(path, table, delimiter=",", header=",".join(header), comments="", fmt="%.9g")
+    else:
+        raise LogFileError(f"{path}: unknown log format {path.suffix!r} (use .npz or .csv)")
+    return path
+
+
+def load_logs(path: str | Path) -> list[dict[str, np.ndarray]]:
+    """Read logs written by :func:`save_logs` (or by hand in the same layout), one per run."""
+    path = Path(path)
+    if not path.is_file():
+        raise LogFileError(f"{path}: no such file")
+    try:
+        arrays = _read_npz(path) if path.suffix == ".npz" else _read_csv(path)
+    except (OSError, ValueError, KeyError) as error:
+        raise LogFileError(f"{path}: cannot read logs ({error})") from None
+    runs = arrays["run"]
+    return [{name: arrays[name][runs == run] for name in ("t", "q", "qd", "tau")}
+            for run in np.unique(runs)]  # fmt: skip
+
+
+def _get(log: object, name: str) -> np.ndarray:
+    return np.asarray(log[name] if isinstance(log, dict) else getattr(log, name), dtype=float)
+
+
+def _stack(logs: Sequence) -> dict[str, np.ndarray]:
+    names = ("t", "q", "qd", "tau")
+    columns = {name: np.concatenate([_get(log, name) for log in logs]) for name in names}
+    columns["run"] = np.concatenate([np.full(len(_get(log, "t")), i) for i, log in enumerate(logs)])
+    return columns
+
+
+def _read_npz(path: Path) -> dict[str, np.ndarray]:
+    with np.load(path) as data:
+        arrays = {name: data[name] for name in ("t", "q", "qd", "tau")}
+        arrays["run"] = data["run"] if "run" in data else np.zeros(len(arrays["t"]), dtype=int)
+    return arrays
+
+
+def _read_csv(path: Path) -> dict[str, np.ndarray]:
+    with path.open(encoding="utf-8") as file:
+        header = file.readline().strip().split(",")
+    table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    if table.shape[1] != len(header):
+        raise ValueError(f"{table.shape[1]} columns but {len(header)} names in the header")
+    column = {name: table[:, i] for i, name in enumerate(header)}
+    n = sum(1 for name in header if name.startswith("tau"))
+    joint_columns = {k: np.column_stack([column[f"{k}{i + 1}"] for i in range(n)])
+                     for k in ("q", "qd", "tau")}  # fmt: skip
+    run = column.get("run", np.zeros(len(table)))
+    return {"t": column["t"], "run": run.astype(int), **joint_columns}
