@@ -50,6 +50,33 @@ def _simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+_EPILOG_IDENTIFY = """examples:
+  leadthrough identify                         # excite every joint of the YuMi twin, fit, plot
+  leadthrough identify --joints 1,4 --out results/friction
+  leadthrough identify --random-friction --seed 3   # a twin with other friction
+  leadthrough identify --log robot.csv   # a real robot's logs: run,t,q1..,qd1..,tau1..
+"""
+
+
+def _identify(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from leadthrough.identify_command import identify, parse_joints
+
+    robot = robots.load(args.robot, tip=args.tip)
+    summary = identify(
+        robot,
+        Path(args.out),
+        log=Path(args.log) if args.log else None,
+        save_log=Path(args.save_log) if args.save_log else None,
+        joints=parse_joints(args.joints, robot.n_joints),
+        seed=args.seed,
+        random_friction=args.random_friction,
+    )
+    print(summary)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand."""
     parser = argparse.ArgumentParser(
@@ -82,6 +109,23 @@ def build_parser() -> argparse.ArgumentParser:
     simulate.add_argument("--seed", type=int, default=0, help="seed of every random draw")
     simulate.add_argument("--out", default="out", help="directory for the figures (default: out)")
     simulate.set_defaults(run=_simulate)
+    identify = commands.add_parser(
+        "identify",
+        help="identify joint friction (twin experiment or log file)",
+        description="Run the friction identification experiment of thesis §4.1.1 on the twin (or"
+        " read logs), fit the Gaussian friction model, write it as TOML with figures 4.2-4.6.",
+        epilog=_EPILOG_IDENTIFY,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    _add_robot_arguments(identify)
+    identify.add_argument("--log", help="read excitation logs (.csv or .npz) instead of the twin")
+    identify.add_argument("--save-log", help="also write the logs (.csv or .npz)")
+    identify.add_argument("--joints", help="joints to identify, 1-based, e.g. 1,4 (default all)")
+    identify.add_argument("--seed", type=int, default=0, help="seed of the twin")
+    identify.add_argument("--random-friction", action="store_true",
+                          help="give the twin randomly drawn friction (seeded)")  # fmt: skip
+    identify.add_argument("--out", default="out/friction", help="output directory")
+    identify.set_defaults(run=_identify)
     return parser
 
 

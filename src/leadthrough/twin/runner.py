@@ -62,7 +62,7 @@ class SimulationResult:
 
     def plot(self, joints: list[int] | None = None) -> Figure:
         """Figure of joint angles, torques and the operator force (see ``twin.plots``)."""
-        from leadthrough.twin.plots import plot_simulation
+        from leadthrough.plots.simulation import plot_simulation
 
         return plot_simulation(self, joints)
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from leadthrough.plots import pyplot
+
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
@@ -17,11 +19,7 @@ def plot_simulation(result: SimulationResult, joints: list[int] | None = None) -
         result: A closed-loop run.
         joints: 0-based joints to show (default: all).
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     joints = list(range(result.q.shape[1])) if joints is None else joints
     figure, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 7), constrained_layout=True)
     for j in joints:
