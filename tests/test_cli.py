@@ -57,3 +57,26 @@ def test_simulate_writes_plot_and_picture(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "scenario joint" in out and "real time" in out
     assert (tmp_path / "joint.png").stat().st_size > 10_000
+
+
+def test_identify_on_twin_then_from_saved_log(tmp_path, capsys):
+    """`identify` fits joint 7 on the twin, writes TOML and figures; its log reads back alike."""
+    import leadthrough as lt
+
+    log = tmp_path / "logs.npz"
+    args = ["identify", "--joints", "7", "--out", str(tmp_path / "twin"), "--save-log", str(log)]
+    assert main(args) == 0
+    assert "τ_C error [%]" in capsys.readouterr().out
+    twin_model = lt.FrictionModel.load(tmp_path / "twin" / "friction.toml")
+    assert (tmp_path / "twin" / "joint7_fig4_3_sigmoid_fit.png").stat().st_size > 10_000
+    assert (
+        main(["identify", "--joints", "7", "--log", str(log), "--out", str(tmp_path / "log")]) == 0
+    )
+    log_model = lt.FrictionModel.load(tmp_path / "log" / "friction.toml")
+    assert log_model.coulomb[6] == twin_model.coulomb[6]
+
+
+def test_identify_rejects_bad_joint_list(capsys):
+    """A joint number out of range is a one-line error, exit code 2."""
+    assert main(["identify", "--joints", "9"]) == 2
+    assert "joints are numbered 1 to 7" in capsys.readouterr().err

@@ -19,22 +19,33 @@ from leadthrough.description import (
     RobotDescription,
 )
 from leadthrough.dynamics import Dynamics
-from leadthrough.errors import InputShapeError, LeadthroughError, RobotDescriptionError
+from leadthrough.errors import (
+    InputShapeError,
+    LeadthroughError,
+    ParameterError,
+    RobotDescriptionError,
+)
+from leadthrough.friction_identification import FitReport, identify_friction
+from leadthrough.friction_model import FrictionModel
 
 __version__ = "0.1.0"
 
 __all__ = [
     "DHParameters",
     "Dynamics",
+    "FitReport",
+    "FrictionModel",
     "InputShapeError",
     "Joint",
     "JointFriction",
     "JointOrigin",
     "LeadthroughError",
     "LinkInertial",
+    "ParameterError",
     "Placement",
     "RobotDescription",
     "RobotDescriptionError",
     "__version__",
+    "identify_friction",
     "robots",
 ]

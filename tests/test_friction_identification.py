@@ -1,0 +1,165 @@
+"""Friction identification on the twin: the fit recovers the twin's true friction."""
+
+import numpy as np
+import pytest
+
+import leadthrough as lt
+from leadthrough.excitation import ExcitationRun, friction_experiment
+from leadthrough.friction_identification import IdentificationError, identify_friction
+from leadthrough.friction_logs import LogFileError, load_logs, save_logs
+from leadthrough.friction_study import run_friction_study
+from leadthrough.trajectories import triangular_velocity
+from leadthrough.twin.friction import randomized_friction
+from leadthrough.twin.simulator import DigitalTwin, TwinConfig
+
+
+@pytest.fixture(scope="module")
+def yumi() -> lt.RobotDescription:
+    """The shipped YuMi description."""
+    return lt.robots.yumi()
+
+
+@pytest.fixture(scope="module")
+def default_study(yumi):
+    """Identification of all joints on the default twin (experiment included)."""
+    return run_friction_study(yumi, progress=False)
+
+
+@pytest.fixture(scope="module")
+def random_study(yumi):
+    """Identification on a twin whose friction is drawn at random (seeded)."""
+    friction = randomized_friction(yumi, np.random.default_rng(11))
+    return run_friction_study(yumi, twin_config=TwinConfig(seed=11, friction=friction))
+
+
+@pytest.fixture(scope="module")
+def short_logs(yumi):
+    """One slow run of joint 7 on the twin."""
+    twin = DigitalTwin(yumi)
+    run = ExcitationRun(peak_velocity=0.3, frequency=0.25, cycles=2)
+    return friction_experiment(twin, lt.Dynamics(yumi), joints=[6], runs=[run])
+
+
+def _assert_recovered(study):
+    coulomb_error, viscous_error = study.errors()
+    assert np.all(np.abs(coulomb_error) < 0.05), coulomb_error
+    assert np.all(np.abs(viscous_error) < 0.10), viscous_error
+
+
+def test_default_twin_coulomb_within_5_and_viscous_within_10_percent(default_study):
+    """On the default twin every joint's τ_C (mid-range) is within 5 %, c within 10 %."""
+    _assert_recovered(default_study)
+    assert default_study.report.joints == tuple(range(7))
+
+
+def test_random_twin_coulomb_within_5_and_viscous_within_10_percent(random_study, yumi):
+    """On a twin with randomly drawn friction the same tolerances hold (nothing tuned)."""
+    _assert_recovered(random_study)
+    nominal = lt.FrictionModel.from_robot(yumi).coulomb
+    assert np.max(np.abs(random_study.truth[0] / nominal - 1.0)) > 0.1  # really different
+
+
+def test_position_dependence_follows_the_cable_effect(default_study, yumi):
+    """The identified τ_C(q) matches the twin's position-dependent level over the strokes."""
+    twin = DigitalTwin(yumi)
+    for joint in range(7):
+        q, _, _ = default_study.joint_samples(joint)
+        for position in np.percentile(q, [5, 95]):
+            pose = 0.5 * (yumi.q_min + yumi.q_max)
+            pose[joint] = position
+            true = twin.friction.params.coulomb_level(pose)[joint]
+            found = default_study.model.coulomb_level(pose)[joint]
+            assert found == pytest.approx(true, rel=0.03)
+
+
+def test_gaussian_model_is_honest_on_sliding_samples(default_study):
+    """Sliding friction lies within ±3 std of the identified mean in > 97 % of samples."""
+    for joint in range(7):
+        q, qd, tau = default_study.joint_samples(joint)
+        sliding = np.abs(qd) > 0.04
+        pose = np.tile(default_study.model.position_mid, (sliding.sum(), 1))
+        pose[:, joint] = q[sliding]
+        speeds = np.zeros_like(pose)
+        speeds[:, joint] = qd[sliding]
+        mean = default_study.model.mean(speeds, pose)[:, joint]
+        std = default_study.model.std(speeds, pose)[:, joint]
+        assert np.mean(np.abs(tau[sliding] - mean) < 3 * std) > 0.97
+
+
+def test_report_carries_fit_quality(default_study):
+    """The report gives residual RMS and parameter standard deviations per joint."""
+    report = default_study.report
+    assert np.all(report.residual_rms < 0.05) and np.all(report.samples > 1000)
+    assert np.all(report.parameter_std["coulomb"] < 0.01)
+    assert "RMS" in str(report)
+
+
+def test_triangular_velocity_profile():
+    """The excitation wave: stroke v/(4f), q̇ = dq/dt, |q̈| = 4 f v, back at 0 each period."""
+    t = np.linspace(0.0, 20.0, 200_001)
+    position, velocity, acceleration = triangular_velocity(t, 0.2, 0.1)
+    assert position.max() == pytest.approx(0.5, abs=1e-9) and abs(position[-1]) < 1e-9
+    np.testing.assert_allclose(np.gradient(position, t)[1:-1], velocity[1:-1], atol=1e-5)
+    np.testing.assert_allclose(np.abs(acceleration), 0.08)
+    assert np.max(np.abs(velocity)) == pytest.approx(0.2, abs=1e-6)
+
+
+def test_mapping_logs_and_log_files_identify_the_same(short_logs, yumi, tmp_path):
+    """Logs as mappings, and saved to CSV and NPZ then loaded, give the same model."""
+    dynamics = lt.Dynamics(yumi)
+    model, _ = identify_friction(short_logs, dynamics, joints=[6])
+    as_dicts = [{"t": log.t, "q": log.q, "qd": log.qd, "tau": log.tau} for log in short_logs]
+    from_dicts, _ = identify_friction(as_dicts, dynamics, joints=[6])
+    assert from_dicts.coulomb[6] == model.coulomb[6]
+    for suffix in (".csv", ".npz"):
+        loaded = load_logs(save_logs(short_logs, tmp_path / f"logs{suffix}"))
+        again, _ = identify_friction(loaded, dynamics, joints=[6])
+        assert again.coulomb[6] == pytest.approx(model.coulomb[6], rel=1e-6)
+
+
+def _broken(log, **changes):
+    data = {"t": log.t, "q": log.q, "qd": log.qd, "tau": log.tau}
+    data.update(changes)
+    return data
+
+
+def _short(log):
+    return _broken(log, t=log.t[:10], q=log.q[:10], qd=log.qd[:10], tau=log.tau[:10])
+
+
+def _nan_velocity(log):
+    qd = log.qd.copy()
+    qd[5, 0] = np.nan
+    return _broken(log, qd=qd)
+
+
+@pytest.mark.parametrize(
+    ("make", "message"),
+    [
+        (_short, "too short"),
+        (lambda log: _broken(log, tau=log.tau[:-1]), r"'tau' has shape"),
+        (_nan_velocity, "'qd' is not finite at sample 5, joint 1"),
+        (lambda log: {"t": log.t, "q": log.q, "qd": log.qd}, "missing 'tau'"),
+        (lambda log: _broken(log, t=log.t[::-1].copy()), "'t' must increase"),
+    ],
+)
+def test_bad_logs_give_clear_errors(short_logs, yumi, make, message):
+    """Malformed logs raise IdentificationError naming the log and what is wrong."""
+    with pytest.raises(IdentificationError, match=message):
+        identify_friction([make(short_logs[0])], lt.Dynamics(yumi), joints=[6])
+
+
+def test_joint_that_never_moved_is_named(short_logs, yumi):
+    """Asking for a joint absent from the logs names it."""
+    with pytest.raises(IdentificationError, match="joint 2 never moved"):
+        identify_friction(short_logs, lt.Dynamics(yumi), joints=[1])
+
+
+def test_unreadable_log_file(tmp_path):
+    """A missing or garbled log file raises LogFileError naming the file."""
+    with pytest.raises(LogFileError, match="no such file"):
+        load_logs(tmp_path / "nothing.csv")
+    garbled = tmp_path / "garbled.csv"
+    garbled.write_text("run,t,q1\n0,0.0\n")
+    with pytest.raises(LogFileError, match=r"garbled\.csv"):
+        load_logs(garbled)
