@@ -1,0 +1,81 @@
+"""Dithering against stiction (thesis §5.3, SPEC §5).
+
+A square wave of 15 Hz and 0.3·τ_C is added to the feed-forward of each joint that is
+at rest: too small to move the joint, it keeps the gearbox vibrating, which lowers the
+torque the operator needs to start a motion, and so the torque the momentum observer
+cannot see. It is switched off on a joint as soon as that joint moves, and back on
+after the joint has rested for a while. Its torque must be removed from the observer's
+input, and the friction compensation's dead-band is widened while it is on.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from leadthrough.description import FloatArray
+from leadthrough.errors import ParameterError
+from leadthrough.friction_model import FrictionModel
+from leadthrough.validation import real
+
+
+@dataclass(frozen=True)
+class DitherParameters:
+    """Dither settings (defaults: thesis §5.3).
+
+    Attributes:
+        frequency: Square-wave frequency [Hz] (15: below the resonances of Fig. 5.3).
+        amplitude: Amplitude as a fraction of each joint's Coulomb level [–] (0.3).
+        moving_velocity: A joint moves above this speed [rad/s]: dither off at once, and the
+            friction compensation dead-band while dithering.
+        rest_time: Time below ``moving_velocity`` before the dither comes back [s].
+    """
+
+    frequency: float = 15.0
+    amplitude: float = 0.3
+    moving_velocity: float = 0.01
+    rest_time: float = 0.2
+
+    def __post_init__(self) -> None:
+        real("frequency", self.frequency, minimum=0.0, strict=True, error=ParameterError)
+        real("amplitude", self.amplitude, minimum=0.0, error=ParameterError)
+        if self.amplitude >= 1.0:
+            raise ParameterError("amplitude", "must stay below 1 (it must not move the joint)")
+        real("moving_velocity", self.moving_velocity, minimum=0, strict=True, error=ParameterError)
+        real("rest_time", self.rest_time, minimum=0.0, error=ParameterError)
+
+
+class Dither:
+    """Square-wave dither on the joints at rest.
+
+    Args:
+        friction: Model whose Coulomb levels set the amplitudes.
+        dt: Control period [s].
+        parameters: Dither settings.
+    """
+
+    def __init__(
+        self, friction: FrictionModel, dt: float, parameters: DitherParameters | None = None
+    ) -> None:
+        self.parameters = parameters or DitherParameters()
+        self.friction = friction
+        self.dt = dt
+        self.reset()
+
+    def reset(self) -> None:
+        """Start a new wave; every joint counts as having rested long enough."""
+        self._time = 0.0
+        self._rest = np.full(self.friction.n_joints, self.parameters.rest_time)
+        self.active = np.ones(self.friction.n_joints, dtype=bool)
+
+    def step(self, qd: ArrayLike, q: ArrayLike | None = None) -> FloatArray:
+        """Dither torque [Nm] for this period, zero on moving joints."""
+        p = self.parameters
+        still = np.abs(np.asarray(qd, dtype=float)) < p.moving_velocity
+        self._rest = np.where(still, self._rest + self.dt, 0.0)
+        self.active = self._rest >= p.rest_time
+        wave = 1.0 if np.sin(2.0 * np.pi * p.frequency * self._time) >= 0.0 else -1.0
+        self._time += self.dt
+        return np.where(self.active, wave * p.amplitude * self.friction.coulomb_level(q), 0.0)
