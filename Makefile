@@ -27,6 +27,7 @@ test: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_dynamics.py
 	$(BIN)/python benchmarks/bench_twin.py
+	$(BIN)/python benchmarks/bench_observer.py
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

@@ -27,6 +27,7 @@ from leadthrough.errors import (
 )
 from leadthrough.friction_identification import FitReport, identify_friction
 from leadthrough.friction_model import FrictionModel
+from leadthrough.observer import MomentumObserver, ObserverParameters
 
 __version__ = "0.1.0"
 
@@ -41,6 +42,8 @@ __all__ = [
     "JointOrigin",
     "LeadthroughError",
     "LinkInertial",
+    "MomentumObserver",
+    "ObserverParameters",
     "ParameterError",
     "Placement",
     "RobotDescription",

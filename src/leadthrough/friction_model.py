@@ -89,6 +89,9 @@ class FrictionModel:
         _require("position_half_range", self.position_half_range > 0.0, "> 0")
         _require("position_linear", _level_stays_positive(self.position_linear,
                  self.position_quadratic), "such that τ_C(q) > 0 over the whole range")  # fmt: skip
+        object.__setattr__(self, "_half_slope", 0.5 * self.slope)
+        object.__setattr__(self, "_half_slope_width", 0.5 * self.slope * self.half_width)
+        object.__setattr__(self, "_position_dependent", self.has_position_dependence)
 
     @property
     def n_joints(self) -> int:
@@ -109,33 +112,52 @@ class FrictionModel:
 
     def coulomb_level(self, q: ArrayLike | None = None) -> FloatArray:
         """Coulomb level τ_C(q) [Nm], (..., n); ``q=None`` gives the mid-range level."""
-        if q is None:
+        if q is None or not self._position_dependent:
             return self.coulomb
         u = (np.asarray(q, dtype=float) - self.position_mid) / self.position_half_range
         return self.coulomb * (1.0 + self.position_linear * u + self.position_quadratic * u * u)
 
+    def _sigmoid_terms(
+        self, qd: ArrayLike, q: ArrayLike | None
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """τ_C(q), c q̇ and tanh(A (q̇ ± B) / 2), the terms of every output below.
+
+        Since 2 s(x) − 1 = tanh(x/2), the sigmoid pair, mean and uncertainty are sums and
+        differences of the two tanh terms: one evaluation serves them all.
+        """
+        qd = np.asarray(qd, dtype=float)
+        centre = self._half_slope * qd
+        upper = np.tanh(centre + self._half_slope_width)
+        lower = np.tanh(centre - self._half_slope_width)
+        return self.coulomb_level(q), self.viscous * qd, upper, lower
+
     def bounds(self, qd: ArrayLike, q: ArrayLike | None = None) -> tuple[FloatArray, FloatArray]:
         """The sigmoid pair (τ_f,max, τ_f,min) of eqs. (4.2)–(4.3) [Nm], each (..., n)."""
-        qd = np.asarray(qd, dtype=float)
-        level = self.coulomb_level(q)
-        viscous = self.viscous * qd
-        upper = level * (2.0 * sigmoid(self.slope * (qd + self.half_width)) - 1.0) + viscous
-        lower = level * (2.0 * sigmoid(self.slope * (qd - self.half_width)) - 1.0) + viscous
-        return upper, lower
+        level, viscous, upper, lower = self._sigmoid_terms(qd, q)
+        return level * upper + viscous, level * lower + viscous
 
     def mean(self, qd: ArrayLike, q: ArrayLike | None = None) -> FloatArray:
         """Mean friction torque, eq. (4.4) [Nm], (..., n), with the sign of q̇."""
-        upper, lower = self.bounds(qd, q)
-        return 0.5 * (upper + lower)
+        level, viscous, upper, lower = self._sigmoid_terms(qd, q)
+        return 0.5 * level * (upper + lower) + viscous
 
     def coulomb_uncertainty(self, qd: ArrayLike, q: ArrayLike | None = None) -> FloatArray:
         """Coulomb uncertainty v_C, eq. (4.5) [Nm], (..., n): ≈ τ_C at rest, → 0 moving."""
-        upper, lower = self.bounds(qd, q)
-        return 0.5 * (upper - lower)
+        level, _, upper, lower = self._sigmoid_terms(qd, q)
+        return 0.5 * level * (upper - lower)
 
     def std(self, qd: ArrayLike, q: ArrayLike | None = None) -> FloatArray:
         """Standard deviation of the friction torque, sqrt(v_C² + σ²) [Nm], (..., n)."""
         return np.hypot(self.coulomb_uncertainty(qd, q), self.noise_std)
+
+    def mean_and_std(
+        self, qd: ArrayLike, q: ArrayLike | None = None
+    ) -> tuple[FloatArray, FloatArray]:
+        """:meth:`mean` and :meth:`std` in one evaluation (the observer's hot path)."""
+        level, viscous, upper, lower = self._sigmoid_terms(qd, q)
+        half_level = 0.5 * level
+        return half_level * (upper + lower) + viscous, np.hypot(half_level * (upper - lower),
+                                                                self.noise_std)  # fmt: skip
 
     def to_dict(self) -> dict[str, list[float]]:
         """Plain-data form (lists per parameter) for TOML."""

@@ -141,9 +141,13 @@ class MomentumObserver:
         n = dynamics.n
         self._levels = self._two_level_gains() if parameters.variant == "two_level" else None
         self._p, self._tau = np.zeros(n), np.zeros(n)
-        self._cov = np.zeros((3, n))  # P11, P12, P22 per joint
+        self._cov = (np.zeros(n), np.zeros(n), np.zeros(n))  # P11, P12, P22 per joint
+        # the entries of Q_d that do not depend on Q_m (Q_m enters Q₁₁ as Q_m dt)
+        self._q11_torque, self._q12, self._q22 = process_noise(
+            np.zeros(n), parameters.torque_noise, self.dt
+        )
+        self._noise_d = parameters.measurement_noise / self.dt
         self._previous_drift: FloatArray | None = None
-        self._std = np.zeros(n)
         self.reset()
 
     # --- public state ------------------------------------------------------------------
@@ -162,9 +166,10 @@ class MomentumObserver:
         """Forget the estimate; the next update starts from the measured momentum."""
         self._initialised = False
         self._tau[:] = 0.0
-        initial = np.sqrt(self.parameters.torque_noise)  # 1 s of random walk
-        self._cov[:] = [[0.0], [0.0], [initial**2]]
-        self._std[:] = initial
+        n = self.dynamics.n
+        variance = self.parameters.torque_noise  # 1 s of random walk
+        self._cov = (np.zeros(n), np.zeros(n), np.full(n, variance))
+        self._std = np.full(n, np.sqrt(variance))
         self._previous_drift = None
 
     # --- the filter --------------------------------------------------------------------
@@ -183,8 +188,12 @@ class MomentumObserver:
         q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
         dynamics = self.dynamics
         momentum = dynamics.mass(q) @ qd
-        drift = (dynamics.coriolis_transpose_times_velocity(q, qd) - dynamics.gravity(q)
-                 - self.friction.mean(qd, q))  # fmt: skip
+        if self._levels is None:
+            friction_mean, friction_std = self.friction.mean_and_std(qd, q)
+        else:  # the two-level gains need no friction std
+            friction_mean, friction_std = self.friction.mean(qd, q), None
+        drift = dynamics.coriolis_transpose_times_velocity(q, qd) - dynamics.gravity(q)
+        drift -= friction_mean
         if not self._initialised:
             self._p[:] = momentum
             self._previous_drift = drift
@@ -195,35 +204,36 @@ class MomentumObserver:
         self._previous_drift = drift
         prior_p = self._p + self.dt * (u + self._tau)
         innovation = momentum - prior_p
-        gain_p, gain_tau = self._gains(qd, q)
+        gain_p, gain_tau = self._gains(qd, friction_std)
         self._p = prior_p + gain_p * innovation
         self._tau = self._tau + gain_tau * innovation
         return self.tau_ext_hat
 
-    def _gains(self, qd: FloatArray, q: FloatArray) -> tuple[FloatArray, FloatArray]:
+    def _gains(
+        self, qd: FloatArray, friction_std: FloatArray | None
+    ) -> tuple[FloatArray, FloatArray]:
         if self._levels is not None:
             moving = np.abs(qd) > self._levels["threshold"]
             levels = self._levels
             self._std = np.where(moving, levels["std_moving"], levels["std_still"])
             return (np.where(moving, levels["k1_moving"], levels["k1_still"]),
                     np.where(moving, levels["k2_moving"], levels["k2_still"]))  # fmt: skip
-        return self._covariance_step(self._model_noise(qd, q))
-
-    def _model_noise(self, qd: ArrayLike, q: ArrayLike | None = None) -> FloatArray:
-        """Q_m = scale · std_f(q̇)² per joint [Nm²/s]."""
-        return self.parameters.friction_noise_scale * self.friction.std(qd, q) ** 2
+        return self._covariance_step(self.parameters.friction_noise_scale * friction_std**2)
 
     def _covariance_step(self, model_noise: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Predict and update the 2×2 covariances of all joints; return the gains."""
+        """Predict (Φ P Φᵀ + Q_d) and update the 2×2 covariances of all joints; the gains.
+
+        ``model_noise`` is Q_m [Nm²/s]; the other entries of Q_d are constants.
+        """
         dt = self.dt
         p11, p12, p22 = self._cov
-        q11, q12, q22 = process_noise(model_noise, self.parameters.torque_noise, dt)
-        prior11 = p11 + 2.0 * dt * p12 + dt * dt * p22 + q11
-        prior12 = p12 + dt * p22 + q12
-        prior22 = p22 + q22
-        innovation_variance = prior11 + self.parameters.measurement_noise / dt
-        k1, k2 = prior11 / innovation_variance, prior12 / innovation_variance
-        self._cov = np.array([(1.0 - k1) * prior11, (1.0 - k1) * prior12, prior22 - k2 * prior12])
+        prior12 = p12 + dt * p22 + self._q12
+        prior22 = p22 + self._q22
+        prior11 = p11 + dt * (2.0 * p12 + dt * p22) + dt * model_noise + self._q11_torque
+        k1 = prior11 / (prior11 + self._noise_d)
+        k2 = prior12 / (prior11 + self._noise_d)
+        keep = 1.0 - k1
+        self._cov = (keep * prior11, keep * prior12, prior22 - k2 * prior12)
         self._std = np.sqrt(self._cov[2])
         return k1, k2
 
@@ -238,7 +248,7 @@ class MomentumObserver:
             ("still", np.zeros_like(threshold)),
             ("moving", 2.0 * threshold + 0.05),
         ):
-            for noise in self._model_noise(speed):
+            for noise in self.parameters.friction_noise_scale * self.friction.std(speed) ** 2:
                 p = self.parameters
                 gain, std = stationary_filter(noise, p.torque_noise, p.measurement_noise, self.dt)
                 for key, value in (("k1", gain[0]), ("k2", gain[1]), ("std", std)):
