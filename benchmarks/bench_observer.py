@@ -10,10 +10,10 @@ Usage:
 from __future__ import annotations
 
 import numpy as np
-from timing import parser, report, time_per_call
 
 import leadthrough as lt
 from leadthrough.observer_baseline import ClassicalMomentumObserver
+from timing import parser, report, time_per_call
 
 
 def main() -> None:
