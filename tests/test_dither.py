@@ -153,15 +153,7 @@ def test_brief_rests_do_not_restart_the_dither(friction):
         (0.001, 0.2),
         (0.002, 0.3),
         (0.004, 0.5),
-        pytest.param(
-            0.01,
-            0.1,
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="bug: rest time accumulated by repeated += dt; 10 × 0.01 = "
-                "0.09999999999999999 < 0.1, so the dither returns one period late",
-            ),
-        ),
+        (0.01, 0.1),
     ],
 )
 def test_rest_time_counted_in_whole_periods(friction, dt, rest_time):

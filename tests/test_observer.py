@@ -296,7 +296,8 @@ def test_classical_residual_tracks_step_with_sign(data, dynamics, friction):
 
 def test_estimate_flips_with_the_external_torque(data, dynamics, friction):
     """Data realising −τ_ext give an estimate of −τ_ext: the sign follows the push."""
-    flipped_tau = data.tau + 2.0 * data.tau_ext  # τ realising −τ_ext
+    pushed = np.vstack([np.zeros((1, N)), data.tau_ext[:-1]])  # τ_ext over (t_{k−1}, t_k]
+    flipped_tau = data.tau + 2.0 * pushed  # τ realising −τ_ext
     plain, _ = run(make_observer("time_varying", dynamics, friction), *_inputs(data))
     flipped, _ = run(make_observer("time_varying", dynamics, friction),
                      data.q, data.qd, flipped_tau)  # fmt: skip

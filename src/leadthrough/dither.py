@@ -61,21 +61,22 @@ class Dither:
     ) -> None:
         self.parameters = parameters or DitherParameters()
         self.friction = friction
-        self.dt = dt
+        self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
+        self._rest_needed = round(self.parameters.rest_time / self.dt)  # whole periods
         self.reset()
 
     def reset(self) -> None:
         """Start a new wave; every joint counts as having rested long enough."""
         self._time = 0.0
-        self._rest = np.full(self.friction.n_joints, self.parameters.rest_time)
+        self._rest = np.full(self.friction.n_joints, self._rest_needed)  # periods at rest
         self.active = np.ones(self.friction.n_joints, dtype=bool)
 
     def step(self, qd: ArrayLike, q: ArrayLike | None = None) -> FloatArray:
         """Dither torque [Nm] for this period, zero on moving joints."""
         p = self.parameters
         still = np.abs(np.asarray(qd, dtype=float)) < p.moving_velocity
-        self._rest = np.where(still, self._rest + self.dt, 0.0)
-        self.active = self._rest >= p.rest_time
+        self._rest = np.where(still, self._rest + 1, 0)
+        self.active = self._rest >= self._rest_needed
         wave = 1.0 if np.sin(2.0 * np.pi * p.frequency * self._time) >= 0.0 else -1.0
         self._time += self.dt
         return np.where(self.active, wave * p.amplitude * self.friction.coulomb_level(q), 0.0)

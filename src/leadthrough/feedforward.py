@@ -94,8 +94,9 @@ class PassiveFeedForward:
         self.compensation.reset()
         if self.dither is not None:
             self.dither.reset()
-        for torque in self._sent:
-            torque[:] = 0.0
+        zeros = [np.zeros(self.dynamics.n) for _ in self._sent]
+        self._sent.clear()
+        self._sent.extend(zeros)  # new arrays: torques already handed out stay as they were
 
     def step(self, q: ArrayLike, qd: ArrayLike) -> FeedForwardTorques:
         """The feed-forward for joint readings q [rad] and velocities q̇ [rad/s]."""

@@ -135,6 +135,9 @@ class MomentumObserver:
         self.friction = friction or FrictionModel.from_robot(dynamics.robot)
         self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
         parameters = parameters or ObserverParameters()
+        unknown = sorted(set(overrides) - set(parameters.__dict__))
+        if unknown:
+            raise ParameterError(unknown[0], "unknown observer parameter")
         if overrides:
             parameters = ObserverParameters(**{**parameters.__dict__, **overrides})
         self.parameters = parameters
@@ -162,7 +165,7 @@ class MomentumObserver:
         """Standard deviation of :attr:`tau_ext_hat` from the filter's covariance [Nm]."""
         return self._std.copy()
 
-    def reset(self, q: ArrayLike | None = None, qd: ArrayLike | None = None) -> None:
+    def reset(self) -> None:
         """Forget the estimate; the next update starts from the measured momentum."""
         self._initialised = False
         self._tau[:] = 0.0

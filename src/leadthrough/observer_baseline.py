@@ -63,11 +63,14 @@ class ClassicalMomentumObserver:
         q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
         dynamics = self.dynamics
         momentum = dynamics.mass(q) @ qd
+        drift = dynamics.coriolis_transpose_times_velocity(q, qd) - dynamics.gravity(q)
+        drift -= self.friction.mean(qd, q)
         if self._initial is None:
-            self._initial = momentum
+            self._initial, self._previous_drift = momentum, drift
             return self.tau_ext_hat
-        u = (np.asarray(tau, dtype=float) + dynamics.coriolis_transpose_times_velocity(q, qd)
-             - dynamics.gravity(q) - self.friction.mean(qd, q))  # fmt: skip
+        # input over the last period, drift terms averaged over its ends as in the Kalman filter
+        u = np.asarray(tau, dtype=float) + 0.5 * (drift + self._previous_drift)
+        self._previous_drift = drift
         self._integral += self.dt * (u + self._residual)
         self._residual = self.gain * (momentum - self._initial - self._integral)
         return self.tau_ext_hat

@@ -1,0 +1,188 @@
+"""Tests of the passive lead-through feed-forward (thesis §4.2 and §5.3)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import leadthrough as lt
+from leadthrough.dither import Dither, DitherParameters
+from leadthrough.feedforward import GravityCompensation, PassiveFeedForward
+from leadthrough.friction_compensation import CoulombCompensation, CoulombCompensationParameters
+from leadthrough.friction_model import FrictionModel
+
+N = 7
+DT = 0.004
+
+
+@pytest.fixture(scope="module")
+def dynamics() -> lt.Dynamics:
+    """The YuMi's rigid-body model."""
+    return lt.Dynamics(lt.robots.yumi())
+
+
+@pytest.fixture(scope="module")
+def friction(dynamics) -> FrictionModel:
+    """The YuMi's friction model (thesis Table 4.1)."""
+    return FrictionModel.from_robot(dynamics.robot)
+
+
+def random_sequence(dynamics, steps: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Readings around home; per joint, segments of rest (sub-threshold jitter) and motion."""
+    rng = np.random.default_rng(seed)
+    q = dynamics.robot.home() + rng.uniform(-0.5, 0.5, (steps, N))
+    qd = np.zeros((steps, N))
+    for j in range(N):
+        k = 0
+        while k < steps:
+            length = int(rng.integers(10, 120))
+            scale = rng.choice([0.0, 0.002, 0.008, 0.015, 0.05, 0.5])
+            qd[k : k + length, j] = scale * rng.uniform(-1.0, 1.0, len(qd[k : k + length]))
+            k += length
+    return q, qd
+
+
+def test_gravity_compensation_is_gravity(dynamics):
+    """GravityCompensation commands G(q) whatever the velocity."""
+    rng = np.random.default_rng(1)
+    controller = GravityCompensation(dynamics)
+    for _ in range(20):
+        q = dynamics.robot.home() + rng.uniform(-1.0, 1.0, N)
+        got = controller.step(q, rng.normal(size=N))
+        np.testing.assert_allclose(got, dynamics.gravity(q), rtol=1e-14, atol=1e-14)
+
+
+def test_parts_without_dither(dynamics, friction):
+    """Gravity part is G(q), friction part is the Coulomb law, dither is zero, total = sum."""
+    q, qd = random_sequence(dynamics, 200, seed=2)
+    feedforward = PassiveFeedForward(dynamics, friction, dt=DT)
+    compensation = CoulombCompensation(friction)
+    for row_q, row_qd in zip(q, qd, strict=True):
+        torques = feedforward.step(row_q, row_qd)
+        np.testing.assert_allclose(torques.gravity, dynamics.gravity(row_q), rtol=1e-14)
+        np.testing.assert_allclose(torques.friction, compensation.step(row_qd, row_q), rtol=1e-14)
+        np.testing.assert_array_equal(torques.dither, np.zeros(N))
+        np.testing.assert_array_equal(torques.dither_in_measurement, np.zeros(N))
+        total = torques.gravity + torques.friction + torques.dither
+        np.testing.assert_allclose(torques.total, total, rtol=1e-15, atol=1e-15)
+
+
+def test_compensation_parameters_are_used(dynamics, friction):
+    """A custom ε and dead band reach the compensation law."""
+    parameters = CoulombCompensationParameters(fraction=0.4, dead_band=0.001, full_velocity=0.02)
+    feedforward = PassiveFeedForward(dynamics, friction, dt=DT, compensation=parameters)
+    compensation = CoulombCompensation(friction, parameters)
+    q, qd = random_sequence(dynamics, 100, seed=3)
+    for row_q, row_qd in zip(q, qd, strict=True):
+        got = feedforward.step(row_q, row_qd).friction
+        np.testing.assert_allclose(got, compensation.step(row_qd, row_q), rtol=1e-14)
+
+
+def test_parts_with_dither(dynamics, friction):
+    """With dither: the dither part is the Dither's, the dead band widens on dithering joints."""
+    q, qd = random_sequence(dynamics, 300, seed=4)
+    settings = DitherParameters()
+    feedforward = PassiveFeedForward(dynamics, friction, dt=DT, dither=settings)
+    dither = Dither(friction, DT, settings)
+    compensation = CoulombCompensation(friction)
+    plain = CoulombCompensation(friction)  # the same law without widening
+    widened = 0
+    for row_q, row_qd in zip(q, qd, strict=True):
+        torques = feedforward.step(row_q, row_qd)
+        expected_dither = dither.step(row_qd, row_q)
+        band = np.where(dither.active, settings.moving_velocity, 0.003)
+        plain_friction = plain.step(row_qd, row_q)
+        np.testing.assert_array_equal(torques.dither, expected_dither)
+        np.testing.assert_allclose(torques.gravity, dynamics.gravity(row_q), rtol=1e-14)
+        expected_friction = compensation.step(row_qd, row_q, band)
+        np.testing.assert_allclose(torques.friction, expected_friction, rtol=1e-14)
+        widened += int(np.any(np.abs(plain_friction - expected_friction) > 1e-3))
+        total = torques.gravity + torques.friction + torques.dither
+        np.testing.assert_allclose(torques.total, total, rtol=1e-15, atol=1e-15)
+    assert widened > 20  # steps where widening changed the compensation
+
+
+@pytest.mark.parametrize("delay", [2, 1, 3, 0])
+def test_dither_in_measurement_is_delayed(dynamics, friction, delay):
+    """dither_in_measurement at step k is the dither of step k − delay (zeros before)."""
+    q, qd = random_sequence(dynamics, 300, seed=5)
+    feedforward = PassiveFeedForward(
+        dynamics, friction, dt=DT, dither=DitherParameters(), measurement_delay=delay
+    )
+    dithers, measured = [], []
+    for row_q, row_qd in zip(q, qd, strict=True):
+        torques = feedforward.step(row_q, row_qd)
+        dithers.append(torques.dither.copy())
+        measured.append(torques.dither_in_measurement.copy())
+    dithers, measured = np.array(dithers), np.array(measured)
+    assert np.count_nonzero(dithers) > 100
+    np.testing.assert_array_equal(measured[:delay], 0.0)
+    np.testing.assert_array_equal(measured[delay:], dithers[: len(dithers) - delay])
+
+
+def test_default_delay_is_two_steps(dynamics, friction):
+    """With the default measurement_delay, step k reports the dither of step k − 2."""
+    feedforward = PassiveFeedForward(dynamics, friction, dt=DT, dither=DitherParameters())
+    q = dynamics.robot.home()
+    steps = [feedforward.step(q, np.zeros(N)) for _ in range(12)]
+    np.testing.assert_array_equal(steps[0].dither_in_measurement, 0.0)
+    np.testing.assert_array_equal(steps[1].dither_in_measurement, 0.0)
+    for k in range(2, 12):
+        np.testing.assert_array_equal(steps[k].dither_in_measurement, steps[k - 2].dither)
+    assert np.all(steps[0].dither > 0.0)  # the wave starts at +0.3 τ_C
+    np.testing.assert_allclose(steps[0].dither, 0.3 * friction.coulomb, rtol=1e-14)
+
+
+def test_dither_widens_the_dead_band(dynamics, friction):
+    """At 0.005 rad/s: zero compensation while dithering, ε τ_C (2/7) without dither."""
+    q = dynamics.robot.home()
+    qd = np.full(N, 0.005)
+    with_dither = PassiveFeedForward(dynamics, friction, dt=DT, dither=DitherParameters())
+    without = PassiveFeedForward(dynamics, friction, dt=DT)
+    for _ in range(100):
+        dithered = with_dither.step(q, qd)
+        plain = without.step(q, qd)
+    np.testing.assert_array_equal(dithered.friction, 0.0)
+    assert np.all(dithered.dither != 0.0)  # the joints count as still: dither on
+    ramp = (0.005 - 0.003) / (0.01 - 0.003)
+    np.testing.assert_allclose(plain.friction, 0.7 * friction.coulomb * ramp, rtol=1e-12)
+
+
+def test_moving_joint_gets_full_compensation_and_no_dither(dynamics, friction):
+    """A joint at 0.5 rad/s: no dither, compensation → ε τ_C as with the plain law."""
+    q = dynamics.robot.home()
+    qd = np.zeros(N)
+    qd[3] = -0.5
+    feedforward = PassiveFeedForward(dynamics, friction, dt=DT, dither=DitherParameters())
+    for _ in range(100):
+        torques = feedforward.step(q, qd)
+    assert torques.dither[3] == 0.0
+    assert torques.friction[3] == pytest.approx(-0.7 * friction.coulomb[3], rel=1e-12)
+    still = [0, 1, 2, 4, 5, 6]
+    assert np.all(torques.dither[still] != 0.0)
+    np.testing.assert_array_equal(torques.friction[still], 0.0)
+
+
+def test_reset_restarts_filter_dither_and_delay_line(dynamics, friction):
+    """After reset the feed-forward repeats exactly what a new one gives on the same inputs."""
+    q, qd = random_sequence(dynamics, 60, seed=6)
+    feedforward = PassiveFeedForward(dynamics, friction, dt=DT, dither=DitherParameters())
+    for row_q, row_qd in zip(q, qd, strict=True):
+        feedforward.step(row_q, row_qd)
+    feedforward.reset()
+    fresh = PassiveFeedForward(dynamics, friction, dt=DT, dither=DitherParameters())
+    for row_q, row_qd in zip(q, qd, strict=True):
+        got, expected = feedforward.step(row_q, row_qd), fresh.step(row_q, row_qd)
+        for part in ("gravity", "friction", "dither", "dither_in_measurement"):
+            np.testing.assert_array_equal(getattr(got, part), getattr(expected, part))
+
+
+def test_reset_does_not_alter_returned_torques(dynamics, friction):
+    """Torques already returned to the caller are not changed by a later reset()."""
+    feedforward = PassiveFeedForward(dynamics, friction, dt=DT, dither=DitherParameters())
+    q = dynamics.robot.home()
+    logged = [feedforward.step(q, np.zeros(N)) for _ in range(3)]
+    before = logged[-1].dither.copy()
+    assert np.all(before != 0.0)
+    feedforward.reset()
+    np.testing.assert_array_equal(logged[-1].dither, before)
