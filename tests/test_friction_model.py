@@ -237,7 +237,14 @@ def test_saved_file_without_position_terms_holds_only_the_table(model, tmp_path)
     path = tmp_path / "friction.toml"
     model.save(path)
     table = tomllib.loads(path.read_text(encoding="utf-8"))["friction"]
-    assert set(table) == {"coulomb", "slope", "half_width", "viscous", "noise_std"}
+    assert set(table) == {
+        "coulomb",
+        "slope",
+        "half_width",
+        "viscous",
+        "noise_std",
+        "relative_error",
+    }
     assert table["coulomb"] == TABLE_4_1_COULOMB
 
 

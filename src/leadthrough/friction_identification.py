@@ -35,6 +35,9 @@ from leadthrough.errors import LeadthroughError
 from leadthrough.filters import low_pass_signal
 from leadthrough.friction_model import FrictionModel, sigmoid
 
+#: Smallest relative Coulomb error an identification claims (a model is never perfect).
+MIN_RELATIVE_ERROR = 0.03
+
 
 class IdentificationError(LeadthroughError, ValueError):
     """The logs cannot identify the friction (too short, NaN, a joint that never moved)."""
@@ -151,6 +154,7 @@ def fit_friction(
                                       f"{settings.moving_velocity:g} rad/s in any log")  # fmt: skip
     prior = prior or FrictionModel.from_robot(dynamics.robot)
     values = {name: getattr(prior, name).copy() for name in prior.to_dict()} | {
+        "relative_error": prior.relative_error.copy(),
         "position_mid": prior.position_mid.copy(),
         "position_half_range": prior.position_half_range.copy(),
         "position_linear": prior.position_linear.copy(),
@@ -255,6 +259,9 @@ def _fit_joint(
         report.parameter_std["position_linear"][j] = std[1] / coulomb
         report.parameter_std["position_quadratic"][j] = std[2] / coulomb
     report.parameter_std["coulomb"][j], report.parameter_std["viscous"][j] = std[0], std[-1]
+    # what is left unexplained: 3 std of the level plus the spread of the sliding residual
+    values["relative_error"][j] = np.clip((3.0 * std[0] + 2.0 * np.std(residual)) / coulomb,
+                                          MIN_RELATIVE_ERROR, 0.5)  # fmt: skip
     report.residual_rms[j] = float(np.sqrt(np.mean(residual**2)))
     report.samples[j] = sliding.sum()
     report.position_fitted[j] = with_position

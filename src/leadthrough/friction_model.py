@@ -38,6 +38,10 @@ from leadthrough.validation import real_array
 
 _PARAMETERS = ("coulomb", "slope", "half_width", "viscous", "noise_std")
 _POSITION = ("position_linear", "position_quadratic", "position_mid", "position_half_range")
+_ERROR = ("relative_error",)
+#: Relative error of the Coulomb levels of a model that does not say (Table 4.1 was tuned by
+#: hand: the project's robustness target, friction off by ±20 %).
+DEFAULT_RELATIVE_ERROR = 0.2
 
 
 def sigmoid(x: FloatArray) -> FloatArray:
@@ -59,6 +63,9 @@ class FrictionModel:
         position_quadratic: k₂ of the position-dependent Coulomb level [–].
         position_mid: Joint reading where u = 0 [rad].
         position_half_range: Joint travel from the middle to an end, u = ±1 [rad], > 0.
+        relative_error: How far the true Coulomb level may be from this model's, as a
+            fraction [–] (0.2 unless an identification measured it); controllers size
+            their dead-zones with it.
     """
 
     coulomb: FloatArray
@@ -70,20 +77,22 @@ class FrictionModel:
     position_quadratic: FloatArray | None = None
     position_mid: FloatArray | None = None
     position_half_range: FloatArray | None = None
+    relative_error: FloatArray | None = None
 
     def __post_init__(self) -> None:
-        given = {name: getattr(self, name) for name in _PARAMETERS + _POSITION}
+        given = {name: getattr(self, name) for name in _PARAMETERS + _POSITION + _ERROR}
         lengths = [np.size(value) for value in given.values() if value is not None]
         n = max(set(lengths), key=lengths.count)  # the length most fields agree on
-        defaults = {"position_linear": 0.0, "position_quadratic": 0.0,
-                    "position_mid": 0.0, "position_half_range": 1.0}  # fmt: skip
+        defaults = {"position_linear": 0.0, "position_quadratic": 0.0, "position_mid": 0.0,
+                    "position_half_range": 1.0,
+                    "relative_error": DEFAULT_RELATIVE_ERROR}  # fmt: skip
         for name, value in given.items():
             if value is None:
                 value = np.full(n, defaults[name])
             if np.shape(value) == (n,) and np.asarray(value).dtype.kind in "fiu":
                 _require(name, np.isfinite(np.asarray(value, dtype=float)), "finite")
             object.__setattr__(self, name, real_array(name, value, (n,), error=ParameterError))
-        for name in ("coulomb", "half_width", "viscous", "noise_std"):
+        for name in ("coulomb", "half_width", "viscous", "noise_std", "relative_error"):
             _require(name, getattr(self, name) >= 0.0, "≥ 0")
         _require("slope", self.slope > 0.0, "> 0")
         _require("position_half_range", self.position_half_range > 0.0, "> 0")
@@ -161,7 +170,7 @@ class FrictionModel:
 
     def to_dict(self) -> dict[str, list[float]]:
         """Plain-data form (lists per parameter) for TOML."""
-        names = _PARAMETERS + (_POSITION if self.has_position_dependence else ())
+        names = _PARAMETERS + _ERROR + (_POSITION if self.has_position_dependence else ())
         return {name: getattr(self, name).tolist() for name in names}
 
     def save(self, path: str | Path) -> None:

@@ -298,9 +298,14 @@ def _tool_vibration(sim: SimulationResult, mask: np.ndarray) -> float:
 
 
 def identified_without_position(friction: FrictionModel) -> FrictionModel:
-    """The model with its position dependence removed (to keep the cable effect unmodelled)."""
+    """The model with its position dependence removed (to keep the cable effect unmodelled).
+
+    Its relative error grows by the dropped variation, |k₁| + |k₂|.
+    """
     zeros = np.zeros(friction.n_joints)
-    return replace(friction, position_linear=zeros, position_quadratic=zeros)
+    dropped = np.abs(friction.position_linear) + np.abs(friction.position_quadratic)
+    return replace(friction, position_linear=zeros, position_quadratic=zeros,
+                   relative_error=friction.relative_error + dropped)  # fmt: skip
 
 
 __all__ = [

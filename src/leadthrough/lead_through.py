@@ -1,0 +1,217 @@
+"""Lead-through control: passive and active, behind the safety supervisor (SPEC §4, §6, §7).
+
+One step, in order:
+
+1. the supervisor checks the sensor sample (a bad one → the safe stop, this period);
+2. feed-forward ``τ_ff = G(q) + τ_fc(q̇) + dither`` (thesis eq. 6.3, §5.3);
+3. the Kalman observer estimates ``τ̂_ext`` from the measured torque (or the command
+   sent, if the robot measures none), dither removed;
+4. model error must not become motion: a bias learned while the arm rests is removed
+   from ``τ̂_ext`` and what remains passes a dead-zone as wide as the model's own
+   uncertainty (friction error, mass error × gravity, friction noise);
+5. active mode: the admittance model turns the operator torque (plus virtual
+   constraints) into references that stay clear of the joint limits, tracked by a PD
+   (thesis eqs. 6.4–6.6); near an end-stop a push *away* from it is taken for the
+   stop's reaction, not the operator's (the failure of thesis §6.3.2);
+6. the supervisor limits the command (torque, speed, soft walls).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from leadthrough.admittance import (
+    AdmittanceState,
+    admittance_step,
+    dead_zone,
+    keep_within,
+    tracking_torque,
+)
+from leadthrough.constraints import VirtualConstraint, constraint_torque
+from leadthrough.description import FloatArray, RobotDescription
+from leadthrough.dynamics import Dynamics
+from leadthrough.errors import ParameterError
+from leadthrough.feedforward import PassiveFeedForward
+from leadthrough.friction_model import FrictionModel
+from leadthrough.lead_through_parameters import LeadThroughParameters, Mode
+from leadthrough.observer import MomentumObserver
+from leadthrough.safety import SafetySupervisor, SupervisorState
+
+
+class LeadThrough:
+    """Hand-guiding controller: ``tau_cmd = ctl.step(q, qd, tau_measured)`` once per period.
+
+    Args:
+        robot: The arm.
+        mode: ``"passive"`` or ``"active"`` (overrides ``parameters.mode``).
+        dt: Control period [s].
+        friction: Friction model (e.g. an identified one); default the description's.
+        parameters: All other settings.
+        constraints: Virtual constraints on the tool.
+    """
+
+    def __init__(
+        self,
+        robot: RobotDescription,
+        mode: Mode | None = None,
+        dt: float = 0.004,
+        friction: FrictionModel | None = None,
+        parameters: LeadThroughParameters | None = None,
+        constraints: Sequence[VirtualConstraint] = (),
+    ) -> None:
+        parameters = parameters or LeadThroughParameters()
+        if mode is not None and mode != parameters.mode:
+            parameters = LeadThroughParameters(**{**parameters.__dict__, "mode": mode})
+        self.parameters = p = parameters
+        self.robot, self.dt = robot, dt
+        self.dynamics = Dynamics(robot)
+        self.friction = friction or FrictionModel.from_robot(robot)
+        if self.friction.n_joints != robot.n_joints:
+            raise ParameterError("friction", f"has {self.friction.n_joints} joints, the robot "
+                                             f"{robot.n_joints}")  # fmt: skip
+        self.constraints = tuple(constraints)
+        self.feed_forward = PassiveFeedForward(self.dynamics, self.friction, dt, p.compensation,
+                                               p.dither, p.measurement_delay)  # fmt: skip
+        self.observer = MomentumObserver(self.dynamics, self.friction, dt, p.observer)
+        self.supervisor = SafetySupervisor(self.dynamics, dt, p.safety)
+        inertia = np.diag(self.dynamics.mass(robot.home()))
+        self.virtual_damping = np.maximum(inertia / p.damping_time,
+                                          self.friction.coulomb / p.coulomb_speed)  # fmt: skip
+        self.kp = inertia * (2.0 * np.pi * p.position_bandwidth) ** 2
+        self.kd = inertia / p.velocity_time
+        relative = (self.friction.relative_error if p.friction_uncertainty is None
+                    else np.full(robot.n_joints, p.friction_uncertainty))  # fmt: skip
+        relative = np.maximum(relative, p.stiction_margin)
+        self._friction_tolerance = relative * self.friction.coulomb + 2.0 * self.friction.noise_std
+        self._reference_low = robot.q_min + p.limit_zone
+        self._reference_high = robot.q_max - p.limit_zone
+        self.reset()
+
+    # --- state a user may read ---------------------------------------------------------
+
+    @property
+    def mode(self) -> Mode:
+        """``"passive"`` or ``"active"``."""
+        return self.parameters.mode
+
+    @property
+    def tau_ext_hat(self) -> FloatArray:
+        """Latest estimated external torque [Nm] (bias not removed)."""
+        return self.observer.tau_ext_hat
+
+    @property
+    def std(self) -> FloatArray:
+        """Standard deviation of :attr:`tau_ext_hat` [Nm]."""
+        return self.observer.std
+
+    @property
+    def operator_torque(self) -> FloatArray:
+        """What drives the admittance: τ̂_ext − bias, through the dead-zone [Nm]."""
+        return self._drive.copy()
+
+    @property
+    def bias(self) -> FloatArray:
+        """Learned model-error bias [Nm]."""
+        return self._bias.copy()
+
+    @property
+    def state(self) -> SupervisorState:
+        """Supervisor state: teaching, holding or fault."""
+        return self.supervisor.state
+
+    def reset(self) -> None:
+        """Start afresh (filters, references, bias); a latched fault is cleared too."""
+        n = self.robot.n_joints
+        self.feed_forward.reset()
+        self.observer.reset()
+        self.supervisor.reset()
+        self.supervisor.teach()
+        self._bias, self._drive = np.zeros(n), np.zeros(n)
+        self._references: AdmittanceState | None = None
+        self._sent = deque([np.zeros(n)] * max(self.parameters.measurement_delay, 1),
+                           maxlen=max(self.parameters.measurement_delay, 1))  # fmt: skip
+        self._time = 0.0
+        self.last_feed_forward = None
+
+    # --- the control step --------------------------------------------------------------
+
+    def step(
+        self, q: ArrayLike, qd: ArrayLike, tau_measured: ArrayLike | None = None
+    ) -> FloatArray:
+        """Motor torque command [Nm] for this period (always finite, within the limits).
+
+        Args:
+            q: Joint readings [rad].
+            qd: Joint velocities [rad/s].
+            tau_measured: Motor torque measured over the last period [Nm], if the robot
+                reports one; otherwise the command sent ``measurement_delay`` steps ago.
+        """
+        self._time += self.dt
+        supervisor = self.supervisor
+        if not supervisor.check(self._time, q, qd, tau_measured):
+            return self._send(supervisor.command(self._time, q, qd, np.zeros(self.robot.n_joints)))
+        try:
+            desired = self._control(np.asarray(q, float), np.asarray(qd, float), tau_measured)
+        except Exception:  # nothing escapes without the safe stop: a NaN command faults
+            desired = np.full(self.robot.n_joints, np.nan)
+        return self._send(supervisor.command(self._time, q, qd, desired))
+
+    def _send(self, command: FloatArray) -> FloatArray:
+        self._sent.append(command.copy())
+        return command
+
+    def _control(self, q: FloatArray, qd: FloatArray, tau_measured: ArrayLike | None) -> FloatArray:
+        feed_forward = self.feed_forward.step(q, qd)
+        self.last_feed_forward = feed_forward
+        applied = self._sent[0] if tau_measured is None else np.asarray(tau_measured, float)
+        estimate = self.observer.update(q, qd, applied - feed_forward.dither_in_measurement)
+        self._update_drive(estimate, qd, feed_forward.gravity)
+        torque = feed_forward.total
+        constraint, _ = constraint_torque(self.constraints, self.dynamics, q, qd)
+        if self.mode == "passive":
+            return torque + constraint
+        return torque + self._admittance(q, qd, self._drive + constraint)
+
+    def _update_drive(self, estimate: FloatArray, qd: FloatArray, gravity: FloatArray) -> None:
+        """Remove the learned bias, apply the dead-zone; learn the bias while the arm rests.
+
+        At rest nobody is guiding the arm, so what the observer reads is model error (or a
+        contact the arm should not push into): it is learned, slowly, as the bias. While
+        the arm moves nothing is learned (the operator's torque would be).
+        """
+        width = self._friction_tolerance + self.parameters.mass_uncertainty * np.abs(gravity)
+        residual = estimate - self._bias
+        if np.all(np.abs(qd) < self.parameters.compensation.full_velocity):
+            self._bias = self._bias + (self.dt / self.parameters.bias_time) * residual
+        self._drive = dead_zone(residual, width)
+
+    def _admittance(self, q: FloatArray, qd: FloatArray, drive: FloatArray) -> FloatArray:
+        """References from the admittance model, and the PD torque that tracks them."""
+        p = self.parameters
+        references = self._references or AdmittanceState(q.copy(), np.zeros_like(q))
+        lost = np.abs(references.q_ref - q) > p.reanchor_error  # an end-stop, a collision
+        if not np.any(drive):  # nobody pushes: let the references settle onto the arm
+            lost |= np.abs(references.qd_ref) < p.compensation.dead_band
+        references = AdmittanceState(np.where(lost, q, references.q_ref),
+                                     np.where(lost, 0.0, references.qd_ref))  # fmt: skip
+        if p.limit_aware:
+            drive = self._ignore_end_stop_reaction(q, drive)
+        mass = self.dynamics.mass(q)
+        references = admittance_step(references, drive, mass, p.inertia_scale,
+                                     self.virtual_damping, self.dt,
+                                     qd if p.damp_measured else None)  # fmt: skip
+        if p.limit_aware:
+            references = keep_within(references, self._reference_low, self._reference_high)
+        self._references = references
+        return tracking_torque(references, q, qd, self.kp, self.kd)
+
+    def _ignore_end_stop_reaction(self, q: FloatArray, drive: FloatArray) -> FloatArray:
+        """Near a limit, a torque pushing away from it is the end-stop's reaction."""
+        near_high = q > self._reference_high
+        near_low = q < self._reference_low
+        reaction = (near_high & (drive < 0)) | (near_low & (drive > 0))
+        return np.where(reaction, 0.0, drive)

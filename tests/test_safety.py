@@ -1,0 +1,318 @@
+"""Tests of the safety supervisor (SPEC §7): limits, braking, walls, sensor faults, safe stop."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import leadthrough as lt
+from leadthrough.errors import ParameterError
+from leadthrough.safety import SafetyParameters, SafetySupervisor, SupervisorState
+
+DT = 0.004
+ROBOT = lt.robots.yumi()
+N = ROBOT.n_joints
+MID = (ROBOT.q_min + ROBOT.q_max) / 2.0
+LIMIT = ROBOT.torque_limits
+
+
+@pytest.fixture(scope="module")
+def dyn() -> lt.Dynamics:
+    """The YuMi's dynamics."""
+    return lt.Dynamics(ROBOT)
+
+
+@pytest.fixture
+def sup(dyn) -> SafetySupervisor:
+    """A fresh supervisor with default parameters."""
+    return SafetySupervisor(dyn, DT)
+
+
+def kinds(supervisor: SafetySupervisor, kind: str) -> list[str]:
+    """Details of the logged events of one kind."""
+    return [event.detail for event in supervisor.events if event.kind == kind]
+
+
+def tool_velocity(dyn, q, speed: float) -> np.ndarray:
+    """A joint velocity [rad/s] moving the flange at ``speed`` [m/s], joints below limits."""
+    qd = np.array([0.3, -0.2, 0.4, 0.5, -0.3, 0.2, 0.1])
+    qd *= speed / np.linalg.norm(dyn.jacobian(q)[:3] @ qd)
+    assert np.all(np.abs(qd) < ROBOT.velocity_limits)
+    return qd
+
+
+def test_command_never_exceeds_the_torque_limits(sup):
+    """For 1000 random huge commands, positions and velocities the output is finite and limited."""
+    rng = np.random.default_rng(0)
+    for _ in range(1000):
+        q = rng.uniform(ROBOT.q_min - 0.3, ROBOT.q_max + 0.3)
+        qd = rng.normal(0.0, 4.0, N)
+        tau = rng.normal(0.0, 1e6, N) * rng.choice([1e-6, 1.0], N)
+        if rng.random() < 0.5:
+            sup.teach()
+        sup.check(0.0, q, qd, None)
+        out = sup.command(0.0, q, qd, tau)
+        assert np.all(np.isfinite(out)) and np.all(np.abs(out) <= LIMIT)
+        sup.reset()
+
+
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
+@pytest.mark.parametrize(("reading", "kind"), [(0, "position"), (1, "velocity"), (2, "torque")])
+@pytest.mark.parametrize("joint", [0, 3, 6])
+def test_non_finite_reading_latches_fault_naming_the_joint(sup, value, reading, kind, joint):
+    """A NaN/Inf in q, q̇ or τ_measured faults in the same call, naming the joint and the value."""
+    sample = [MID.copy(), np.zeros(N), np.zeros(N)]
+    sample[reading][joint] = value
+    assert not sup.check(1.0, *sample)
+    assert sup.state is SupervisorState.FAULT
+    assert sup.fault_reason == f"joint {joint + 1} {kind} reading {value}"
+    assert kinds(sup, "fault") == [sup.fault_reason]
+
+
+@pytest.mark.parametrize(
+    ("reading", "kind", "value"),
+    [
+        (0, "position", ROBOT.q_max[4] + 0.11),
+        (0, "position", ROBOT.q_min[4] - 0.11),
+        (1, "velocity", -2.01 * ROBOT.velocity_limits[4]),
+        (2, "torque", 1.51 * LIMIT[4]),
+    ],
+)
+def test_out_of_range_reading_latches_fault(sup, reading, kind, value):
+    """A reading beyond its margin faults in the same call, naming joint 5 and the value."""
+    sample = [MID.copy(), np.zeros(N), np.zeros(N)]
+    sample[reading][4] = value
+    assert not sup.check(1.0, *sample)
+    assert sup.fault_reason.startswith(f"joint 5 {kind} reading {value:.4g}")
+
+
+def test_readings_just_inside_the_margins_are_good(sup):
+    """Positions, velocities and torques just inside their margins pass the check."""
+    q = ROBOT.q_max + 0.099
+    assert sup.check(0.0, q, 1.99 * ROBOT.velocity_limits, -1.49 * LIMIT)
+    assert sup.state is SupervisorState.HOLDING
+
+
+def test_frozen_encoder_faults_after_exactly_stale_periods(dyn):
+    """Joint 4 bit-identical for stale_periods samples faults on that sample, not before."""
+    sup = SafetySupervisor(dyn, DT, SafetyParameters(stale_periods=10))
+    rng = np.random.default_rng(1)
+    for k in range(10):
+        q, qd = MID.copy(), rng.normal(0.0, 1e-4, N)
+        qd[3] = 0.0123
+        assert sup.check(k * DT, q, qd) == (k < 9)
+    assert sup.fault_reason == "joint 4 encoder frozen: q and qd identical for 10 samples"
+
+
+def test_noisy_samples_at_rest_never_look_frozen(sup):
+    """A still arm (same quantised q) with noisy velocity readings never faults."""
+    rng = np.random.default_rng(2)
+    q = np.round(MID / 1e-4) * 1e-4
+    for k in range(1000):
+        assert sup.check(k * DT, q, rng.normal(0.0, 1e-4, N), np.zeros(N))
+
+
+def test_frozen_counter_restarts_on_reset(dyn):
+    """After reset() a frozen encoder needs stale_periods new samples to fault again."""
+    sup = SafetySupervisor(dyn, DT, SafetyParameters(stale_periods=5))
+    results = [sup.check(k * DT, MID, np.zeros(N)) for k in range(5)]
+    sup.reset()
+    results += [sup.check(k * DT, MID, np.zeros(N)) for k in range(5)]
+    assert results == [True] * 4 + [False] + [True] * 4 + [False]
+
+
+def test_stale_periods_zero_turns_the_check_off(dyn):
+    """With stale_periods = 0, identical samples (a noiseless mock) never fault."""
+    sup = SafetySupervisor(dyn, DT, SafetyParameters(stale_periods=0))
+    assert all(sup.check(k * DT, MID, np.zeros(N)) for k in range(100))
+
+
+@pytest.mark.parametrize(("name", "length"), [("q", 6), ("qd", 8), ("tau_measured", 1)])
+def test_wrong_shape_is_a_fault_with_a_clear_reason(sup, name, length):
+    """A reading of the wrong length faults, saying the shape expected."""
+    sample = {"q": MID, "qd": np.zeros(N), "tau_measured": np.zeros(N), name: np.zeros(length)}
+    assert not sup.check(0.0, **sample)
+    assert f"has shape ({length},), expected ({N},)" in sup.fault_reason
+
+
+def test_garbage_and_internal_errors_never_escape(sup, dyn, monkeypatch):
+    """Unconvertible input or a failing model is a fault and a finite torque, not an exception."""
+    assert not sup.check(0.0, "not a position", None, None)
+    assert sup.fault_reason.startswith("sensor check failed: ValueError")
+    sup.reset()
+    monkeypatch.setattr(dyn, "mass", lambda q: 1 / 0)
+    out = sup.command(0.0, MID, np.zeros(N), np.zeros(N))
+    assert sup.fault_reason == "command failed: ZeroDivisionError: division by zero"
+    assert np.all(np.isfinite(out)) and np.all(np.abs(out) <= LIMIT)
+
+
+def test_nan_command_faults_and_output_is_the_safe_stop(sup, dyn):
+    """A NaN in the desired torque faults in the same period, with a finite damped gravity hold."""
+    qd = np.full(N, 0.1)
+    assert sup.check(2.0, MID, qd, None)
+    tau = np.zeros(N)
+    tau[2] = np.nan
+    out = sup.command(2.0, MID, qd, tau)
+    assert sup.fault_reason == "non-finite command on joint 3"
+    expected = dyn.gravity(MID) - np.diag(dyn.mass(MID)) / 0.05 * qd
+    np.testing.assert_allclose(out, np.clip(expected, -LIMIT, LIMIT))
+
+
+def test_safe_stop_is_damped_then_pure_gravity(sup, dyn):
+    """The safe stop is G(q_good) − D q̇ for safe_stop_damping_time, then G(q_good) alone."""
+    q_good, qd = MID + 0.05, np.array([0.2, -0.1, 0.3, 0.0, -0.2, 0.1, 0.05])
+    assert sup.check(0.0, q_good, qd)
+    assert not sup.check(DT, q_good, np.full(N, np.nan))
+    damping = np.diag(dyn.mass(q_good)) / sup.parameters.braking_time
+    tau = np.full(N, 1.0)
+    damped = sup.command(DT + 0.49, MID, qd, tau)
+    np.testing.assert_allclose(damped, np.clip(dyn.gravity(q_good) - damping * qd, -LIMIT, LIMIT))
+    np.testing.assert_allclose(sup.command(DT + 0.5, MID, qd, tau), dyn.gravity(q_good))
+    sup.reset()
+    sup.check(0.0, q_good, qd)
+    sup.command(0.0, q_good, qd, np.full(N, np.inf))
+    np.testing.assert_allclose(
+        sup.command(0.0, q_good, np.full(N, np.nan), tau), dyn.gravity(q_good)
+    )
+
+
+def test_fault_stays_latched_until_reset(sup):
+    """After a fault, good samples, mode changes and commands keep FAULT until reset()."""
+    sup.check(0.0, MID, np.full(N, np.nan))
+    reason = sup.fault_reason
+    sup.teach()
+    for k in range(50):
+        assert not sup.check(k * DT, MID, np.zeros(N) + k * 1e-5)
+        assert not np.allclose(sup.command(k * DT, MID, np.zeros(N), np.ones(N)), np.ones(N))
+    sup.check(1.0, MID, np.full(N, np.inf))
+    assert sup.state is SupervisorState.FAULT and sup.fault_reason == reason
+    assert len(kinds(sup, "fault")) == 1 and not kinds(sup, "mode")
+    sup.reset()
+    assert sup.state is SupervisorState.HOLDING and sup.fault_reason is None
+    assert sup.check(2.0, MID, np.full(N, 1e-3))
+    np.testing.assert_allclose(sup.command(2.0, MID, np.full(N, 1e-3), np.ones(N)), np.ones(N))
+    assert [event.kind for event in sup.events] == ["fault", "reset"]
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_joint_braking_opposes_velocity_above_the_limit_only(sup, dyn, sign):
+    """Above its speed limit a joint gets −M_ii(|q̇|−limit)/T sign(q̇); below, nothing is added."""
+    tau = np.array([1.0, -2.0, 0.5, 0.0, 0.3, -0.1, 0.2])
+    below = sign * 0.99 * ROBOT.velocity_limits
+    np.testing.assert_allclose(sup.command(0.0, MID, below, tau), tau)
+    qd = below.copy()
+    qd[5] = sign * 1.02 * ROBOT.velocity_limits[5]
+    out = sup.command(0.0, MID, qd, tau)
+    brake = dyn.mass(MID)[5, 5] * 0.02 * ROBOT.velocity_limits[5] / 0.05
+    assert np.sign(out[5] - tau[5]) == -sign
+    np.testing.assert_allclose(out - tau, np.eye(N)[5] * -sign * brake, atol=1e-12)
+
+
+def test_tool_speed_braking_only_while_teaching(sup, dyn):
+    """A 0.5 m/s tool is braked by −(1 − v_lim/‖v‖) M q̇ / T while teaching, not while holding."""
+    qd = tool_velocity(dyn, MID, 0.5)
+    tau = np.zeros(N)
+    np.testing.assert_allclose(sup.command(0.0, MID, qd, tau), tau)
+    sup.teach()
+    expected = -(1.0 - 0.25 / 0.5) * dyn.mass(MID) @ qd / 0.05
+    np.testing.assert_allclose(sup.command(0.0, MID, qd, tau), np.clip(expected, -LIMIT, LIMIT))
+    assert sup.max_tool_speed == pytest.approx(0.5)
+    np.testing.assert_allclose(sup.command(0.0, MID, tool_velocity(dyn, MID, 0.24), tau), tau)
+
+
+def test_tool_braking_decelerates_the_tool(sup, dyn):
+    """With M q̈ = τ_brake alone, d‖v‖/dt < 0: v·(J M⁻¹ τ_brake) < 0 at random states."""
+    rng = np.random.default_rng(3)
+    sup.teach()
+    for _ in range(50):
+        q = rng.uniform(ROBOT.q_min + 0.2, ROBOT.q_max - 0.2)
+        qd = rng.normal(0.0, 1.0, N)
+        jv = dyn.jacobian(q)[:3]
+        qd *= rng.uniform(0.3, 0.6) / np.linalg.norm(jv @ qd)
+        qd = np.clip(qd, -0.99 * ROBOT.velocity_limits, 0.99 * ROBOT.velocity_limits)
+        brake = sup.command(0.0, q, qd, np.zeros(N))
+        v = jv @ qd
+        assert np.linalg.norm(v) <= 0.25 or v @ (jv @ np.linalg.solve(dyn.mass(q), brake)) < 0.0
+
+
+@pytest.mark.parametrize("side", ["lower", "upper"])
+def test_wall_pushes_away_and_grows_with_penetration(sup, dyn, side):
+    """Inside the margin the wall pushes away from the limit, growing to fraction×limit at it."""
+    away = 1.0 if side == "lower" else -1.0
+    hard = ROBOT.q_min[3] if side == "lower" else ROBOT.q_max[3]
+    torques = []
+    for depth in [0.0, 0.02, 0.05, 0.1]:
+        q = MID.copy()
+        q[3] = hard + away * (0.1 - depth)
+        torques.append(sup.command(0.0, q, np.zeros(N), np.zeros(N))[3] * away)
+    assert torques[0] == 0.0 and np.all(np.diff(torques) > 0.0)
+    assert torques[-1] == pytest.approx(0.5 * LIMIT[3])
+    qd_out, qd_in = np.zeros(N), np.zeros(N)
+    qd_out[3], qd_in[3] = 0.5 * away, -0.5 * away
+    pushing = sup.command(0.0, q, qd_out, np.zeros(N))[3] * away
+    damped = sup.command(0.0, q, qd_in, np.zeros(N))[3] * away
+    assert pushing == pytest.approx(torques[-1])
+    assert damped == pytest.approx(torques[-1] + dyn.mass(q)[3, 3] / 0.05 * 0.5)
+
+
+def test_record_cycle_counts_overruns(sup):
+    """Every cycle longer than dt is counted; one event per run of consecutive overruns."""
+    for k, duration in enumerate([0.003, 0.005, 0.006, 0.001, 0.0041, np.nan, 0.004]):
+        sup.record_cycle(k * DT, duration)
+    assert sup.overruns == 4
+    assert len(kinds(sup, "overrun")) == 2
+
+
+def test_events_are_logged_once_per_episode(sup, dyn):
+    """Walls, joint and tool braking and mode changes log when they start, not every period."""
+    in_wall = MID.copy()
+    in_wall[1] = ROBOT.q_max[1] - 0.05
+    fast = np.zeros(N)
+    fast[0] = 1.1 * ROBOT.velocity_limits[0]
+    sup.teach()
+    sup.teach()
+    for _ in range(2):
+        for k in range(20):
+            sup.command(k * DT, in_wall, fast, np.zeros(N))
+        for k in range(20):
+            sup.command(k * DT, MID, tool_velocity(dyn, MID, 0.4), np.zeros(N))
+        sup.command(1.0, MID, np.zeros(N), np.zeros(N))
+    assert (
+        len(kinds(sup, "soft_limit")) == 2 and "joint 2 entered the upper" in sup.events[1].detail
+    )
+    assert len(kinds(sup, "joint_speed")) == 2 and len(kinds(sup, "tool_speed")) == 2
+    assert kinds(sup, "mode") == ["mode teaching"]
+    sup.hold()
+    sup.hold()
+    assert kinds(sup, "mode") == ["mode teaching", "mode holding"]
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("tool_speed_limit", 0.0),
+        ("joint_speed_fraction", 1.5),
+        ("braking_time", -0.1),
+        ("soft_limit_margin", np.nan),
+        ("wall_torque_fraction", 0.0),
+        ("wall_damping_time", 0.0),
+        ("stale_periods", 1),
+        ("stale_periods", 2.5),
+        ("stale_periods", True),
+        ("torque_reading_margin", 0.9),
+        ("velocity_reading_margin", 0.5),
+        ("position_reading_margin", -0.01),
+        ("safe_stop_damping_time", "long"),
+    ],
+)
+def test_invalid_parameters_are_rejected(field, value):
+    """Each invalid setting raises a ParameterError naming the field."""
+    with pytest.raises(ParameterError) as error:
+        SafetyParameters(**{field: value})
+    assert error.value.parameter == field
+
+
+def test_invalid_period_is_rejected(dyn):
+    """A non-positive control period raises a ParameterError naming dt."""
+    with pytest.raises(ParameterError, match="dt"):
+        SafetySupervisor(dyn, dt=0.0)
