@@ -7,8 +7,8 @@ One step, in order:
 3. the Kalman observer estimates ``τ̂_ext`` from the measured torque (or the command
    sent, if the robot measures none), dither removed;
 4. model error must not become motion: a bias learned while the arm rests is removed
-   from ``τ̂_ext`` and what remains passes a dead-zone as wide as the model's own
-   uncertainty (friction error, mass error × gravity, friction noise);
+   from ``τ̂_ext`` and what remains passes a dead-zone as wide as the model's remaining
+   uncertainty (friction error and noise, gravity error, :mod:`leadthrough.bias`);
 5. active mode: the admittance model turns the operator torque (plus virtual
    constraints) into references that stay clear of the joint limits, tracked by a PD
    (thesis eqs. 6.4–6.6); near an end-stop a push *away* from it is taken for the
@@ -31,6 +31,7 @@ from leadthrough.admittance import (
     keep_within,
     tracking_torque,
 )
+from leadthrough.bias import ModelErrorBias
 from leadthrough.constraints import VirtualConstraint, constraint_torque
 from leadthrough.description import FloatArray, RobotDescription
 from leadthrough.dynamics import Dynamics
@@ -116,7 +117,7 @@ class LeadThrough:
     @property
     def bias(self) -> FloatArray:
         """Learned model-error bias [Nm]."""
-        return self._bias.copy()
+        return self.model_error.bias.copy()
 
     @property
     def state(self) -> SupervisorState:
@@ -130,7 +131,10 @@ class LeadThrough:
         self.observer.reset()
         self.supervisor.reset()
         self.supervisor.teach()
-        self._bias, self._drive = np.zeros(n), np.zeros(n)
+        p = self.parameters
+        self.model_error = ModelErrorBias(n, p.bias_time, p.mass_uncertainty,
+                                          p.compensation.full_velocity)  # fmt: skip
+        self._drive = np.zeros(n)
         self._references: AdmittanceState | None = None
         self._sent = deque([np.zeros(n)] * max(self.parameters.measurement_delay, 1),
                            maxlen=max(self.parameters.measurement_delay, 1))  # fmt: skip
@@ -177,37 +181,43 @@ class LeadThrough:
         return torque + self._admittance(q, qd, self._drive + constraint)
 
     def _update_drive(self, estimate: FloatArray, qd: FloatArray, gravity: FloatArray) -> None:
-        """Remove the learned bias, apply the dead-zone; learn the bias while the arm rests.
-
-        At rest nobody is guiding the arm, so what the observer reads is model error (or a
-        contact the arm should not push into): it is learned, slowly, as the bias. While
-        the arm moves nothing is learned (the operator's torque would be).
-        """
-        width = self._friction_tolerance + self.parameters.mass_uncertainty * np.abs(gravity)
-        residual = estimate - self._bias
-        if np.all(np.abs(qd) < self.parameters.compensation.full_velocity):
-            self._bias = self._bias + (self.dt / self.parameters.bias_time) * residual
-        self._drive = dead_zone(residual, width)
+        """Remove the bias learned at rest and apply a dead-zone as wide as the model error."""
+        residual = self.model_error.update(estimate, qd, gravity, self.dt)
+        width = self._friction_tolerance + self.model_error.tolerance(gravity)
+        drive = dead_zone(residual, width)
+        # assist motions the operator has started: a joint at rest (where the observer is
+        # blind and its reading is mostly model error) or moving against the estimate gets none
+        started = np.sign(qd) * drive > 0.0
+        started &= np.abs(qd) > self.parameters.compensation.dead_band
+        self._drive = np.where(started, drive, 0.0)
 
     def _admittance(self, q: FloatArray, qd: FloatArray, drive: FloatArray) -> FloatArray:
-        """References from the admittance model, and the PD torque that tracks them."""
+        """References from the admittance model, and the PD torque that tracks them.
+
+        A joint the operator does not drive is left to the feed-forward alone (passive):
+        its references follow the measured state, so the PD neither brakes nor holds it
+        and nothing winds up; friction stops it when released, as in passive mode. The
+        same re-anchoring happens when tracking is lost (an end-stop, a collision).
+        """
         p = self.parameters
-        references = self._references or AdmittanceState(q.copy(), np.zeros_like(q))
-        lost = np.abs(references.q_ref - q) > p.reanchor_error  # an end-stop, a collision
-        if not np.any(drive):  # nobody pushes: let the references settle onto the arm
-            lost |= np.abs(references.qd_ref) < p.compensation.dead_band
-        references = AdmittanceState(np.where(lost, q, references.q_ref),
-                                     np.where(lost, 0.0, references.qd_ref))  # fmt: skip
         if p.limit_aware:
             drive = self._ignore_end_stop_reaction(q, drive)
-        mass = self.dynamics.mass(q)
-        references = admittance_step(references, drive, mass, p.inertia_scale,
-                                     self.virtual_damping, self.dt,
-                                     qd if p.damp_measured else None)  # fmt: skip
+        references = self._references or AdmittanceState(q.copy(), qd.copy())
+        free = (drive == 0.0) | (np.abs(references.q_ref - q) > p.reanchor_error)
+        references = AdmittanceState(np.where(free, q, references.q_ref),
+                                     np.where(free, qd, references.qd_ref))  # fmt: skip
+        if np.all(free):
+            self._references = references
+            return np.zeros_like(q)
+        references = admittance_step(references, drive, self.dynamics.mass(q), p.inertia_scale,
+                                     self.virtual_damping, self.dt)  # fmt: skip
         if p.limit_aware:
             references = keep_within(references, self._reference_low, self._reference_high)
         self._references = references
-        return tracking_torque(references, q, qd, self.kp, self.kd)
+        feedback = tracking_torque(references, q, qd, self.kp, self.kd)
+        if p.assist_only:  # the feedback pushes with the operator, never against
+            feedback = np.where(feedback * drive > 0.0, feedback, 0.0)
+        return np.where(free, 0.0, feedback)
 
     def _ignore_end_stop_reaction(self, q: FloatArray, drive: FloatArray) -> FloatArray:
         """Near a limit, a torque pushing away from it is the end-stop's reaction."""

@@ -65,6 +65,9 @@ class LeadThroughParameters:
             (it is the end-stop's reaction) [rad].
         limit_aware: Whether the admittance respects ``limit_zone`` (False reproduces the
             failure of thesis §6.3.2).
+        assist_only: The feedback only ever pushes the way the operator pushes; braking is
+            left to friction, as in passive mode (False: the thesis' PD, which also brakes
+            when the virtual damping asks for it, Fig. 6.4).
         measurement_delay: Control steps from sending a command to measuring it [–].
     """
 
@@ -76,18 +79,18 @@ class LeadThroughParameters:
     observer: ObserverParameters = field(default_factory=ObserverParameters)
     safety: SafetyParameters = field(default_factory=SafetyParameters)
     inertia_scale: float = 0.3
-    damping_time: float = 0.3
+    damping_time: float = 3.0
     position_bandwidth: float = 1.0
     velocity_time: float = 0.02
     mass_uncertainty: float = 0.05
     friction_uncertainty: float | None = None
-    coulomb_speed: float = 2.0
-    stiction_margin: float = 0.1
+    coulomb_speed: float = 10.0
+    stiction_margin: float = 0.05
     bias_time: float = 1.0
     reanchor_error: float = 0.05
     limit_zone: float = 0.2
     limit_aware: bool = True
-    damp_measured: bool = False
+    assist_only: bool = True
     measurement_delay: int = 2
 
     def __post_init__(self) -> None:
@@ -123,6 +126,7 @@ class LeadThroughParameters:
         return cls(inertia_scale=1.0, damping_time=20.0, position_bandwidth=6.0,
                    velocity_time=0.008, mass_uncertainty=0.0, friction_uncertainty=0.0,
                    bias_time=1e6, reanchor_error=1e6, limit_aware=False, dither=None,
+                   assist_only=False,
                    **changes)  # fmt: skip
 
     @classmethod

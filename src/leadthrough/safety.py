@@ -226,9 +226,13 @@ class SafetySupervisor:
         inertia = np.diag(mass)
         limit = self.robot.torque_limits
         tau = np.clip(tau_desired, -limit, limit)  # a huge command cannot swamp the safety
-        tau += self._walls(q, qd, inertia) + self._joint_braking(qd, inertia)
+        braking = self._joint_braking(qd, inertia)
         if self.state is SupervisorState.TEACHING:
-            tau += self._tool_braking(q, qd, mass)
+            braking = braking + self._tool_braking(q, qd, mass)
+        # while braking, the brakes win: the controller's torque on a braked joint is
+        # replaced by gravity compensation, so no controller can push through the limit
+        tau = np.where(braking != 0.0, self.dynamics.gravity(q), tau)
+        tau += self._walls(q, qd, inertia) + braking
         if not np.all(np.isfinite(tau)):
             self._fault("non-finite safety torque")
             return None
