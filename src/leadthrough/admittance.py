@@ -66,9 +66,15 @@ def tracking_torque(
     return kp * (state.q_ref - q) + kd * (state.qd_ref - qd)
 
 
-def dead_zone(value: FloatArray, width: FloatArray) -> FloatArray:
-    """``sign(x) · max(|x| − w, 0)``: what is left of ``value`` beyond ``width``."""
-    return np.sign(value) * np.maximum(np.abs(value) - width, 0.0)
+def dead_zone(value: FloatArray, width: FloatArray, offset: FloatArray | float = 0.0) -> FloatArray:
+    """What is left of ``value`` outside [min(0, offset) − width, max(0, offset) + width].
+
+    With ``offset = 0`` this is ``sign(x) · max(|x| − w, 0)``. A non-zero offset (a learned
+    bias) only widens the band towards itself: it can silence a reading, never create one.
+    """
+    upper = np.maximum(offset, 0.0) + width
+    lower = np.minimum(offset, 0.0) - width
+    return np.where(value > upper, value - upper, np.where(value < lower, value - lower, 0.0))
 
 
 def keep_within(state: AdmittanceState, low: FloatArray, high: FloatArray) -> AdmittanceState:

@@ -37,13 +37,30 @@ class ModelErrorBias:
         self._gravity_learned = np.zeros(n_joints)
 
     def update(
-        self, estimate: FloatArray, qd: FloatArray, gravity: FloatArray, dt: float
+        self,
+        estimate: FloatArray,
+        qd: FloatArray,
+        gravity: FloatArray,
+        dt: float,
+        bound: FloatArray,
+        learn: bool = True,
     ) -> FloatArray:
-        """Learn while the arm rests; return the estimate minus the bias [Nm]."""
+        """Learn while the arm rests; return the estimate minus the bias [Nm].
+
+        Args:
+            estimate: Observer estimate [Nm].
+            qd: Joint velocities [rad/s].
+            gravity: G(q) [Nm].
+            dt: Period [s].
+            bound: Largest plausible model error per joint [Nm]: the bias never exceeds it,
+                so a push against an end-stop or an operator holding the arm still is not
+                learned as model error.
+            learn: Whether learning is allowed now (e.g. not at an end-stop).
+        """
         residual = estimate - self.bias
-        if np.all(np.abs(qd) < self.rest_velocity):
+        if learn and np.all(np.abs(qd) < self.rest_velocity):
             rate = dt / self.learning_time
-            self.bias = self.bias + rate * residual
+            self.bias = np.clip(self.bias + rate * residual, -bound, bound)
             self._gravity_learned = self._gravity_learned + rate * (gravity - self._gravity_learned)
             self.confidence += rate * (1.0 - self.confidence)
         return estimate - self.bias

@@ -88,6 +88,7 @@ class LeadThrough:
                     else np.full(robot.n_joints, p.friction_uncertainty))  # fmt: skip
         relative = np.maximum(relative, p.stiction_margin)
         self._friction_tolerance = relative * self.friction.coulomb + 2.0 * self.friction.noise_std
+        self._speed_cap = p.assist_speed_fraction * robot.velocity_limits
         self._reference_low = robot.q_min + p.limit_zone
         self._reference_high = robot.q_max - p.limit_zone
         self.reset()
@@ -135,6 +136,7 @@ class LeadThrough:
         self.model_error = ModelErrorBias(n, p.bias_time, p.mass_uncertainty,
                                           p.compensation.full_velocity)  # fmt: skip
         self._drive = np.zeros(n)
+        self._idle = 0.0
         self._references: AdmittanceState | None = None
         self._sent = deque([np.zeros(n)] * max(self.parameters.measurement_delay, 1),
                            maxlen=max(self.parameters.measurement_delay, 1))  # fmt: skip
@@ -173,18 +175,24 @@ class LeadThrough:
         self.last_feed_forward = feed_forward
         applied = self._sent[0] if tau_measured is None else np.asarray(tau_measured, float)
         estimate = self.observer.update(q, qd, applied - feed_forward.dither_in_measurement)
-        self._update_drive(estimate, qd, feed_forward.gravity)
+        self._update_drive(estimate, q, qd, feed_forward.gravity)
         torque = feed_forward.total
         constraint, _ = constraint_torque(self.constraints, self.dynamics, q, qd)
         if self.mode == "passive":
             return torque + constraint
         return torque + self._admittance(q, qd, self._drive + constraint)
 
-    def _update_drive(self, estimate: FloatArray, qd: FloatArray, gravity: FloatArray) -> None:
+    def _update_drive(
+        self, estimate: FloatArray, q: FloatArray, qd: FloatArray, gravity: FloatArray
+    ) -> None:
         """Remove the bias learned at rest and apply a dead-zone as wide as the model error."""
-        residual = self.model_error.update(estimate, qd, gravity, self.dt)
+        p = self.parameters
+        plausible = self._friction_tolerance + p.mass_uncertainty * np.abs(gravity)
+        clear_of_limits = bool(np.all((q > self._reference_low) & (q < self._reference_high)))
+        self.model_error.update(estimate, qd, gravity, self.dt, 2.0 * plausible,
+                                learn=clear_of_limits)  # fmt: skip
         width = self._friction_tolerance + self.model_error.tolerance(gravity)
-        drive = dead_zone(residual, width)
+        drive = dead_zone(estimate, width, self.model_error.bias)
         # assist motions the operator has started: a joint at rest (where the observer is
         # blind and its reading is mostly model error) or moving against the estimate gets none
         started = np.sign(qd) * drive > 0.0
@@ -196,13 +204,18 @@ class LeadThrough:
 
         A joint the operator does not drive is left to the feed-forward alone (passive):
         its references follow the measured state, so the PD neither brakes nor holds it
-        and nothing winds up; friction stops it when released, as in passive mode. The
-        same re-anchoring happens when tracking is lost (an end-stop, a collision).
+        and nothing winds up (the same re-anchoring happens when tracking is lost: an
+        end-stop, a collision). Once no joint has been driven for ``release_time`` the
+        operator has let go: the PD brakes the arm to a stop (q̇_ref = 0).
         """
         p = self.parameters
         if p.limit_aware:
             drive = self._ignore_end_stop_reaction(q, drive)
         references = self._references or AdmittanceState(q.copy(), qd.copy())
+        self._idle = 0.0 if np.any(drive) else self._idle + self.dt
+        if self._idle > p.release_time:  # the operator has let go: brake to a stop, hold
+            self._references = AdmittanceState(q.copy(), np.zeros_like(q))
+            return tracking_torque(self._references, q, qd, 0.0, self.kd)
         free = (drive == 0.0) | (np.abs(references.q_ref - q) > p.reanchor_error)
         references = AdmittanceState(np.where(free, q, references.q_ref),
                                      np.where(free, qd, references.qd_ref))  # fmt: skip
@@ -211,6 +224,7 @@ class LeadThrough:
             return np.zeros_like(q)
         references = admittance_step(references, drive, self.dynamics.mass(q), p.inertia_scale,
                                      self.virtual_damping, self.dt)  # fmt: skip
+        references.qd_ref = np.clip(references.qd_ref, -self._speed_cap, self._speed_cap)
         if p.limit_aware:
             references = keep_within(references, self._reference_low, self._reference_high)
         self._references = references

@@ -68,6 +68,11 @@ class LeadThroughParameters:
         assist_only: The feedback only ever pushes the way the operator pushes; braking is
             left to friction, as in passive mode (False: the thesis' PD, which also brakes
             when the virtual damping asks for it, Fig. 6.4).
+        assist_speed_fraction: The admittance never asks a joint for more than this
+            fraction of its speed limit [–] (teaching is slow; the tool speed limit of the
+            supervisor stays the last word).
+        release_time: No operator torque on any joint for this long means the operator let
+            go: the arm is braked to a stop [s].
         measurement_delay: Control steps from sending a command to measuring it [–].
     """
 
@@ -91,13 +96,16 @@ class LeadThroughParameters:
     limit_zone: float = 0.2
     limit_aware: bool = True
     assist_only: bool = True
+    assist_speed_fraction: float = 0.3
+    release_time: float = 0.15
     measurement_delay: int = 2
 
     def __post_init__(self) -> None:
         if self.mode not in ("passive", "active"):
             raise ParameterError("mode", f"'passive' or 'active', got {self.mode!r}")
         positive = ("inertia_scale", "damping_time", "velocity_time", "bias_time",
-                    "reanchor_error", "limit_zone", "coulomb_speed")  # fmt: skip
+                    "reanchor_error", "limit_zone", "coulomb_speed",
+                    "assist_speed_fraction", "release_time")  # fmt: skip
         for name in positive:
             real(name, getattr(self, name), minimum=0.0, strict=True, error=ParameterError)
         for name in (
