@@ -17,15 +17,18 @@ def robots_dir() -> Path:
 
 
 @pytest.fixture(scope="session")
-def realistic_friction():
-    """Friction identified on the realistic twin (masses ±5 %), position dependence dropped.
-
-    What a user does on a real robot: identify, then run the observer with the result;
-    the twin's cable effect stays unmodelled.
-    """
+def identified_friction():
+    """Friction identified on the realistic twin (masses ±5 %), as a user does first."""
     import leadthrough as lt
     from leadthrough.friction_study import run_friction_study
-    from leadthrough.observer_experiments import REALISTIC_TWIN, identified_without_position
+    from leadthrough.observer_experiments import REALISTIC_TWIN
 
-    study = run_friction_study(lt.robots.yumi(), twin_config=REALISTIC_TWIN)
-    return identified_without_position(study.model)
+    return run_friction_study(lt.robots.yumi(), twin_config=REALISTIC_TWIN).model
+
+
+@pytest.fixture(scope="session")
+def realistic_friction(identified_friction):
+    """The identified friction without its position dependence (cable effect unmodelled)."""
+    from leadthrough.observer_experiments import identified_without_position
+
+    return identified_without_position(identified_friction)

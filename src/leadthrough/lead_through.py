@@ -195,9 +195,11 @@ class LeadThrough:
         drive = dead_zone(estimate, width, self.model_error.bias)
         # assist motions the operator has started: a joint at rest (where the observer is
         # blind and its reading is mostly model error) or moving against the estimate gets none
-        started = np.sign(qd) * drive > 0.0
-        started &= np.abs(qd) > self.parameters.compensation.dead_band
-        self._drive = np.where(started, drive, 0.0)
+        if p.require_motion:
+            started = np.sign(qd) * drive > 0.0
+            started &= np.abs(qd) > p.compensation.dead_band
+            drive = np.where(started, drive, 0.0)
+        self._drive = drive
 
     def _admittance(self, q: FloatArray, qd: FloatArray, drive: FloatArray) -> FloatArray:
         """References from the admittance model, and the PD torque that tracks them.

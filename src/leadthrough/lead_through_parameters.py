@@ -73,6 +73,8 @@ class LeadThroughParameters:
             supervisor stays the last word).
         release_time: No operator torque on any joint for this long means the operator let
             go: the arm is braked to a stop [s].
+        require_motion: Assist only joints already moving the way the estimate pushes
+            (at rest the observer is blind and reads model error, end-stops and contacts).
         measurement_delay: Control steps from sending a command to measuring it [–].
     """
 
@@ -98,6 +100,7 @@ class LeadThroughParameters:
     assist_only: bool = True
     assist_speed_fraction: float = 0.3
     release_time: float = 0.15
+    require_motion: bool = True
     measurement_delay: int = 2
 
     def __post_init__(self) -> None:
@@ -134,7 +137,7 @@ class LeadThroughParameters:
         return cls(inertia_scale=1.0, damping_time=20.0, position_bandwidth=6.0,
                    velocity_time=0.008, mass_uncertainty=0.0, friction_uncertainty=0.0,
                    bias_time=1e6, reanchor_error=1e6, limit_aware=False, dither=None,
-                   assist_only=False,
+                   assist_only=False, require_motion=False, release_time=1e6,
                    **changes)  # fmt: skip
 
     @classmethod

@@ -1,0 +1,150 @@
+"""Lead-through on the twin: effort, release and stay, stability, safety, bad input."""
+
+import numpy as np
+import pytest
+
+import leadthrough as lt
+from leadthrough.lead_through import LeadThrough
+from leadthrough.lead_through_experiments import (
+    end_stop,
+    guided_run,
+    release_and_stay,
+    stability_session,
+)
+from leadthrough.lead_through_parameters import LeadThroughParameters
+from leadthrough.safety import SupervisorState
+from leadthrough.session_operator import teaching_session_operator
+from leadthrough.twin.operator import Hand
+from leadthrough.twin.paths import MinimumJerk
+from leadthrough.twin.runner import simulate
+from leadthrough.twin.simulator import DigitalTwin
+
+
+@pytest.fixture(scope="module")
+def yumi() -> lt.RobotDescription:
+    """The shipped YuMi description."""
+    return lt.robots.yumi()
+
+
+@pytest.fixture(scope="module")
+def friction(identified_friction):
+    """Friction identified on the realistic twin."""
+    return identified_friction
+
+
+@pytest.mark.parametrize("path", ["line", "circle", "point_to_point"])
+def test_active_is_lighter_than_passive_and_passive_than_none(yumi, friction, path):
+    """The same hand on the same path: RMS force active < passive < gravity compensation only."""
+    runs = {mode: guided_run(yumi, path, mode, friction) for mode in ("none", "passive", "active")}
+    assert runs["active"].rms_force < 0.8 * runs["passive"].rms_force
+    assert runs["passive"].rms_force < runs["none"].rms_force
+
+
+def test_released_arm_stops_within_half_a_second_and_stays(yumi, friction):
+    """Let go at speed: every joint below 0.01 rad/s within 0.5 s, then < 1 mrad in 10 s."""
+    result = release_and_stay(yumi, friction)
+    assert result.stop_time <= 0.5
+    assert result.drift < 1e-3
+
+
+def test_sixty_second_session_is_stable(yumi, friction):
+    """Guiding, a ~20 N press on a table, an end-stop: each release stops (0.5 s) and stays."""
+    sim = stability_session(yumi, friction)
+    actions = teaching_session_operator.actions(yumi)
+    press = next(a for a in actions if "table" in a.label)
+    pressing = (sim.t > press.start + 2.5) & (sim.t < press.stop)
+    contact = sim.tau_ext[pressing] - sim.tau_operator[pressing]
+    assert np.max(np.abs(contact)) > 2.0  # the tool really pressed on the table
+    assert np.all(np.abs(sim.tau_command) <= yumi.torque_limits + 1e-9)
+    starts = [a.start for a in actions[1:]] + [sim.t[-1]]
+    for action, next_start in zip(actions, starts, strict=True):
+        after = (sim.t >= action.stop) & (sim.t < next_start)
+        moving = np.flatnonzero(np.any(np.abs(sim.qd_true[after]) > 0.01, axis=1))
+        assert moving.size == 0 or sim.t[after][moving[-1]] - action.stop <= 0.5, action.label
+        window = after & (sim.t >= action.stop + 0.5) & (sim.t < action.stop + 10.5)
+        settled = sim.q_true[window]
+        assert np.max(np.abs(settled - settled[0])) < 1e-3, action.label  # over ≤ 10 s
+
+
+def test_thesis_settings_run_away_from_the_end_stop_defaults_do_not(yumi, friction):
+    """Thesis §6.3.2: its settings turn the end-stop into motion; the defaults stay put."""
+    unstable = end_stop(yumi, LeadThroughParameters.thesis_unstable(), friction)
+    default = end_stop(yumi, None, friction)
+    assert unstable.travel_after_release > 0.2
+    assert default.travel_after_release < 0.05
+
+
+def test_random_pushes_up_to_100_newton_stay_within_limits(yumi, friction):
+    """Pulls of up to 100 N: torque within limits, no fault, overspeed braked."""
+    rng = np.random.default_rng(5)
+    dynamics = lt.Dynamics(yumi)
+    start = dynamics.pose(yumi.home())[:3, 3]
+    fastest = 0.0
+    for _ in range(3):
+        goal = start + rng.uniform(-0.3, 0.3, 3)
+        hand = Hand(MinimumJerk(start, goal, duration=rng.uniform(0.3, 1.0)),
+                    stiffness=2000.0, max_force=100.0)  # fmt: skip
+        twin = DigitalTwin(yumi, operator=hand)
+        controller = LeadThrough(yumi, friction=friction)
+        sim = simulate(twin, controller, 2.0)
+        assert np.all(np.abs(sim.tau_command) <= yumi.torque_limits + 1e-9)
+        assert controller.state is not SupervisorState.FAULT
+        speeds = np.linalg.norm(np.gradient(sim.flange_position, sim.t, axis=0), axis=1)
+        fastest = max(fastest, float(speeds.max()))
+        braked = [e for e in controller.supervisor.events if e.kind == "tool_speed"]
+        assert speeds.max() <= 0.26 or braked
+    assert fastest > 0.25  # the test did push beyond the limit
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("q", np.nan), ("qd", np.inf), ("tau", 1e3), ("q", 100.0)],
+)
+def test_bad_sensor_data_stops_the_arm_in_the_same_period(yumi, field, value):
+    """NaN, Inf, an absurd torque or position reading: fault and safe stop at once."""
+    controller = LeadThrough(yumi)
+    q, qd, tau = yumi.home(), np.zeros(7), np.zeros(7)
+    for _ in range(5):
+        controller.step(q, qd + 1e-4 * np.random.default_rng(0).normal(size=7), tau)
+    sample = {"q": q.copy(), "qd": qd.copy(), "tau": tau.copy()}
+    sample[field][2] = value
+    command = controller.step(sample["q"], sample["qd"], sample["tau"])
+    assert controller.state is SupervisorState.FAULT
+    assert "joint 3" in controller.supervisor.fault_reason
+    np.testing.assert_allclose(command[:2], lt.Dynamics(yumi).gravity(q)[:2], atol=1.0)
+    assert np.all(np.isfinite(command)) and np.all(np.abs(command) <= yumi.torque_limits)
+
+
+def test_frozen_encoder_is_a_fault(yumi):
+    """Bit-identical readings for stale_periods samples mean a dead sensor: safe stop."""
+    controller = LeadThrough(yumi)
+    q, qd = yumi.home(), np.full(7, 1e-4)
+    for _ in range(30):
+        controller.step(q, qd, np.zeros(7))
+    assert controller.state is SupervisorState.FAULT
+    assert "frozen" in controller.supervisor.fault_reason
+
+
+def test_normal_guiding_never_faults(yumi, friction):
+    """A guided path in both modes leaves the supervisor teaching (no hidden exception)."""
+    for mode in ("passive", "active"):
+        controller = LeadThrough(yumi, mode, friction=friction)
+        twin = DigitalTwin(yumi, operator=Hand(MinimumJerk(*_line(yumi), duration=2.0)))
+        simulate(twin, controller, 2.5)
+        assert controller.state is SupervisorState.TEACHING, controller.supervisor.fault_reason
+
+
+def _line(robot):
+    start = lt.Dynamics(robot).pose(robot.home())[:3, 3]
+    return start, start + np.array([0.0, 0.1, 0.0])
+
+
+def test_parameters_load_from_toml(tmp_path):
+    """LeadThroughParameters load nested tables; unknown keys name the field."""
+    path = tmp_path / "lead.toml"
+    path.write_text('mode = "passive"\ninertia_scale = 0.5\n[dither]\nfrequency = 12.0\n')
+    parameters = LeadThroughParameters.from_toml(path)
+    assert parameters.mode == "passive" and parameters.dither.frequency == 12.0
+    path.write_text("inertia = 0.5\n")
+    with pytest.raises(lt.ParameterError, match="inertia"):
+        LeadThroughParameters.from_toml(path)
