@@ -28,6 +28,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_dynamics.py
 	$(BIN)/python benchmarks/bench_twin.py
 	$(BIN)/python benchmarks/bench_observer.py
+	$(BIN)/python benchmarks/bench_step.py
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

@@ -27,6 +27,8 @@ from leadthrough.errors import (
 )
 from leadthrough.friction_identification import FitReport, identify_friction
 from leadthrough.friction_model import FrictionModel
+from leadthrough.lead_through import LeadThrough
+from leadthrough.lead_through_parameters import LeadThroughParameters
 from leadthrough.observer import MomentumObserver, ObserverParameters
 
 __version__ = "0.1.0"
@@ -40,6 +42,8 @@ __all__ = [
     "Joint",
     "JointFriction",
     "JointOrigin",
+    "LeadThrough",
+    "LeadThroughParameters",
     "LeadthroughError",
     "LinkInertial",
     "MomentumObserver",

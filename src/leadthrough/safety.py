@@ -334,7 +334,12 @@ class SafetySupervisor:
 
     def _started(self, key: str, active: NDArray[np.bool_]) -> NDArray[np.intp]:
         """Indices where ``key`` became active this period (for one event per episode)."""
+        if not active.any() and key not in self._active:
+            return np.empty(0, dtype=np.intp)
         started = np.flatnonzero(active & ~self._active.get(key, np.zeros_like(active)))
+        if not active.any():
+            del self._active[key]
+            return started
         self._active[key] = active
         return started
 
@@ -375,6 +380,8 @@ def _reading_problem(
     """Why one reading vector is invalid (shape, non-finite, outside [low, high]), or None."""
     if value.shape != low.shape:
         return f"{kind} reading has shape {value.shape}, expected {low.shape}"
+    if np.all((value >= low) & (value <= high)):  # the usual case, one test (NaN fails it)
+        return None
     bad = np.flatnonzero(~np.isfinite(value))
     if bad.size:
         return f"joint {bad[0] + 1} {kind} reading {value[bad[0]]}"
