@@ -79,7 +79,7 @@ class GuidedRun:
         rms_force: RMS hand force over the path's duration [N].
         peak_force: Largest hand force [N].
         path_error: RMS distance of the flange from the hand's reference [m].
-        completion_time: First time the flange is within 1 cm of the path's end [s]
+        completion_time: First time the flange is within 2 cm of the path's end [s]
             (NaN if never).
         log: What the controller computed (empty for ``"none"``).
     """
@@ -113,7 +113,7 @@ def guided_run(
     on_path = sim.t <= reference.duration
     force = sim.operator_force
     end = np.linalg.norm(sim.flange_position - reference.position(reference.duration), axis=1)
-    done = np.flatnonzero((end < 0.01) & (sim.t > 0.5 * reference.duration))
+    done = np.flatnonzero((end < 0.02) & (sim.t > 0.5 * reference.duration))
     log = controller.arrays() if isinstance(controller, Recorder) else {}
     return GuidedRun(path, mode, sim, float(np.sqrt(np.mean(force[on_path] ** 2))),
                      float(force.max()), float(np.sqrt(np.mean(distance**2))),
