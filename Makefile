@@ -19,7 +19,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/leadthrough info
+	$(BIN)/leadthrough demo
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q

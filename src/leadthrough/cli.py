@@ -77,6 +77,68 @@ def _identify(args: argparse.Namespace) -> int:
     return 0
 
 
+_EPILOG_DEMO = """examples:
+  leadthrough demo                 # identify, teach (recorded), replay, report in out/demo
+  leadthrough demo --out /tmp/demo
+"""
+
+_EPILOG_TEACH = """examples:
+  leadthrough teach                  # a hand teaches a line, recorded to out/taught.mcap
+  leadthrough teach --path circle --mode passive --out circle.mcap
+  leadthrough teach --friction out/friction/friction.toml --duration 8
+"""
+
+_EPILOG_REPLAY = """examples:
+  leadthrough replay out/taught.mcap
+  leadthrough replay out/taught.mcap --time-scale 2 --out out/replay
+"""
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from leadthrough.demo import run_demo
+    from leadthrough.demo_report import write_report
+
+    robot = robots.load(args.robot, tip=args.tip)
+    out = Path(args.out)
+    result = run_demo(out, robot)
+    print("4/4 writing the report …")
+    report = write_report(result, robot, out)
+    errors = result.replay_error
+    print(f"replay: joint RMS {1000 * errors['joint_rms']:.2f} mrad, "
+          f"tool RMS {1000 * errors['tool_rms']:.2f} mm")  # fmt: skip
+    print(f"report: {report}")
+    return 0
+
+
+def _teach(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from leadthrough.teach import teach_on_twin
+
+    robot = robots.load(args.robot, tip=args.tip)
+    print(teach_on_twin(robot, Path(args.out), args.path, args.mode, args.duration,
+                        Path(args.friction) if args.friction else None, args.seed))  # fmt: skip
+    return 0
+
+
+def _replay(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from leadthrough.teach import replay_on_twin
+
+    print(replay_on_twin(Path(args.recording), Path(args.out), args.time_scale, args.seed))
+    return 0
+
+
+def _add(commands, name: str, help_text: str, description: str, epilog: str, run):
+    parser = commands.add_parser(name, help=help_text, description=description, epilog=epilog,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
+    parser.set_defaults(run=run)
+    return parser
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand."""
     parser = argparse.ArgumentParser(
@@ -126,6 +188,30 @@ def build_parser() -> argparse.ArgumentParser:
                           help="give the twin randomly drawn friction (seeded)")  # fmt: skip
     identify.add_argument("--out", default="out/friction", help="output directory")
     identify.set_defaults(run=_identify)
+    demo = _add(commands, "demo", "the main job: teach, record and replay on the twin",
+                "Identify the twin's friction, let a simulated operator teach the YuMi a path with"
+                " active lead-through (recorded), replay it, and write a report with figures.",
+                _EPILOG_DEMO, _demo)  # fmt: skip
+    _add_robot_arguments(demo)
+    demo.add_argument("--out", default="out/demo", help="report directory (default: out/demo)")
+    teach = _add(commands, "teach", "teach the twin a path with a simulated hand, recorded",
+                 "A simulated operator guides the twin with lead-through; the session is recorded"
+                 " to an MCAP file.", _EPILOG_TEACH, _teach)  # fmt: skip
+    _add_robot_arguments(teach)
+    teach.add_argument("--path", default="line", choices=["line", "circle", "point_to_point"])
+    teach.add_argument("--mode", default="active", choices=["active", "passive"])
+    teach.add_argument("--duration", type=float, help="seconds (default: the path's)")
+    teach.add_argument("--friction", help="identified friction TOML (default: the robot's)")
+    teach.add_argument("--seed", type=int, default=0)
+    teach.add_argument("--out", default="out/taught.mcap", help="recording to write")
+    replay = _add(commands, "replay", "replay a recorded path on the twin",
+                  "Plan (filter, pauses as waypoints, limits checked) and replay a recording on"
+                  " the twin; print the tracking errors and write a figure.",
+                  _EPILOG_REPLAY, _replay)  # fmt: skip
+    replay.add_argument("recording", help="an MCAP recording of a teaching session")
+    replay.add_argument("--time-scale", type=float, default=1.0, help=">1 slower, <1 faster")
+    replay.add_argument("--seed", type=int, default=0)
+    replay.add_argument("--out", default="out/replay", help="figure directory")
     return parser
 
 

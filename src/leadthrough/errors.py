@@ -55,3 +55,37 @@ class OperatorError(ParameterError):
 
 class FrictionParameterError(ParameterError):
     """A friction parameter is invalid (twin friction physics or its defaults)."""
+
+
+class RecordingError(LeadthroughError):
+    """A session recording cannot be written or read.
+
+    Attributes:
+        path: The recording file.
+        reason: What went wrong.
+    """
+
+    def __init__(self, path: str, reason: str) -> None:
+        self.path = path
+        self.reason = reason
+        super().__init__(f"{path}: {reason}")
+
+
+class ReplayError(LeadthroughError, ValueError):
+    """A taught path cannot be replayed: a malformed recording, or it breaks a limit.
+
+    Attributes:
+        reason: One line saying what is wrong (joint, time, value and limit when it is a
+            limit).
+        joint: The offending joint, numbered from 1 at the base, or None.
+        suggested_time_scale: A ``time_scale`` that passes the speed and torque checks,
+            when slowing down helps, else None.
+    """
+
+    def __init__(
+        self, reason: str, joint: int | None = None, suggested_time_scale: float | None = None
+    ) -> None:
+        self.reason = reason
+        self.joint = joint
+        self.suggested_time_scale = suggested_time_scale
+        super().__init__(reason)

@@ -1,0 +1,279 @@
+"""Tests of replay (SPEC §8): planning, its refusals, and tracking on the digital twin."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import leadthrough as lt
+from leadthrough.errors import ParameterError, ReplayError
+from leadthrough.replay import (
+    Replayer,
+    ReplayParameters,
+    plan_replay,
+    replay_errors,
+)
+from leadthrough.safety import SafetySupervisor, SupervisorState
+from leadthrough.trajectories import minimum_jerk_phase
+from leadthrough.twin.model_error import ModelError
+from leadthrough.twin.runner import simulate
+from leadthrough.twin.sensors import SensorModel
+from leadthrough.twin.simulator import DigitalTwin, TwinConfig
+
+ROBOT = lt.robots.yumi()
+N = ROBOT.n_joints
+DT = 0.004
+HOME = ROBOT.home()
+#: The taught path: rest, move, 0.5 s pause, move, 0.5 s pause, move, rest (6 s in all).
+PIECES = (("rest", 0.2), ("move", 1.5), ("rest", 0.5), ("move", 1.5), ("rest", 0.5),
+          ("move", 1.6), ("rest", 0.2))  # fmt: skip
+PAUSES = ((1.7, 2.2), (3.7, 4.2))  # [s]
+
+
+@pytest.fixture(scope="module")
+def dyn() -> lt.Dynamics:
+    """The YuMi's dynamics."""
+    return lt.Dynamics(ROBOT)
+
+
+def taught_path() -> tuple[np.ndarray, np.ndarray]:
+    """A 6 s taught path at 250 Hz: every joint moves 0.2–0.4 rad around home, two pauses.
+
+    Minimum-jerk moves between four poses, read through the twin's encoder quantisation.
+    """
+    stroke = np.array([0.3, 0.25, 0.4, 0.3, 0.35, 0.3, 0.2]) * np.array([1, -1, 1, 1, -1, 1, -1])
+    poses = [HOME - stroke / 2, HOME + stroke / 2, HOME - stroke / 4 * (-1) ** np.arange(N),
+             HOME + stroke / 3]  # fmt: skip
+    t = np.arange(1501) * DT
+    q, start, pose = np.empty((len(t), N)), 0.0, 0
+    for kind, duration in PIECES:
+        inside = (t >= start - 1e-9) & (t < start + duration - 1e-9)
+        if kind == "move":
+            phase, _ = minimum_jerk_phase(t[inside] - start, duration)
+            q[inside] = poses[pose] + np.outer(phase, poses[pose + 1] - poses[pose])
+            pose += 1
+        else:
+            q[inside] = poses[pose]
+        start += duration
+    q[-1] = poses[-1]
+    quantum = SensorModel().quantum(ROBOT)
+    return t, np.round(q / quantum) * quantum
+
+
+def sinusoid(amplitude: float = 0.2, frequency: float = 0.2, duration: float = 6.0):
+    """A slow sinusoid on every joint around home: times [s], q [rad], q̇ [rad/s]."""
+    t = np.arange(round(duration / DT) + 1) * DT
+    wave = np.sin(2 * np.pi * frequency * t)[:, None] * amplitude * np.ones(N)
+    rate = 2 * np.pi * frequency * np.cos(2 * np.pi * frequency * t)[:, None] * amplitude
+    return t, HOME + wave, rate * np.ones(N)
+
+
+def test_smoothing_leaves_a_smooth_path_unchanged(dyn):
+    """A slow sinusoid comes out of the zero-phase smoothing within 1e-4 rad, its speed too."""
+    t, q, qd = sinusoid()
+    plan = plan_replay(t, q, dyn)
+    assert np.max(np.abs(plan.q - q)) < 1e-4
+    assert np.max(np.abs(plan.qd[5:-5] - qd[5:-5])) < 1e-3
+
+
+def test_smoothing_removes_step_noise(dyn):
+    """A path read through a coarse 2 mrad encoder (a staircase) comes out near the true one."""
+    t, q, qd = sinusoid()
+    steps = np.round(q / 2e-3) * 2e-3
+    plan = plan_replay(t, steps, dyn)
+    raw_speed = np.gradient(steps, DT, axis=0)
+    assert np.sqrt(np.mean((plan.q - q) ** 2)) < 0.25 * np.sqrt(np.mean((steps - q) ** 2))
+    assert np.max(np.abs(plan.qd - qd)) < 0.05 < 0.2 < np.max(np.abs(raw_speed - qd))
+
+
+def test_pauses_are_waypoints_between_motion_segments(dyn):
+    """Two 0.5 s stops give two waypoints inside them and three motion segments around them."""
+    t, q = taught_path()
+    plan = plan_replay(t, q, dyn)
+    assert len(plan.waypoints) == 2 and len(plan.segments) == 3
+    for waypoint, (start, stop) in zip(plan.waypoints, PAUSES, strict=True):
+        assert abs(plan.t[waypoint] - (start + stop) / 2) < 0.02
+    moving = np.zeros(len(plan.t), dtype=bool)
+    for a, b in plan.segments:
+        moving[a:b] = True
+    for start, stop in PAUSES:
+        middle = (plan.t > start + 0.1) & (plan.t < stop - 0.1)
+        assert not moving[middle].any()
+    assert np.all(np.abs(plan.qd[~moving]).max(axis=1) < 0.01)
+
+
+def test_time_scale_two_doubles_the_duration_and_halves_the_speed(dyn):
+    """time_scale = 2: same path, twice the time, half the speed, a quarter the acceleration."""
+    t, q = taught_path()
+    normal = plan_replay(t, q, dyn)
+    slow = plan_replay(t, q, dyn, parameters=ReplayParameters(time_scale=2.0))
+    assert slow.duration == pytest.approx(2.0 * normal.duration)
+    np.testing.assert_allclose(slow.q, normal.q)
+    np.testing.assert_allclose(slow.qd, normal.qd / 2.0)
+    np.testing.assert_allclose(slow.qdd, normal.qdd / 4.0)
+    assert slow.waypoints == normal.waypoints and slow.segments == normal.segments
+    inertial = normal.tau_required - slow.tau_required  # gravity is the same in both
+    assert np.max(np.abs(inertial)) > 0.01
+
+
+def test_required_torque_is_inverse_dynamics_plus_mean_friction(dyn):
+    """tau_required equals RNEA + the friction mean at sampled points of the plan."""
+    t, q = taught_path()
+    plan = plan_replay(t, q, dyn)
+    friction = lt.FrictionModel.from_robot(ROBOT)
+    for k in (0, 300, 700, 1200):
+        expected = dyn.inverse_dynamics(plan.q[k], plan.qd[k], plan.qdd[k])
+        expected += friction.mean(plan.qd[k])
+        np.testing.assert_allclose(plan.tau_required[k], expected, atol=1e-9)
+
+
+def refusals() -> dict[str, tuple]:
+    """Bad recordings: (t, q, parameters, words the one-line message must contain)."""
+    t, q = taught_path()
+    near_limit = q.copy()
+    near_limit[:, 1] += ROBOT.q_max[1] - 0.01 - q[:, 1].max()  # 10 mrad from the hard limit
+    nan = q.copy()
+    nan[40, 3] = np.nan
+    backwards = t.copy()
+    backwards[9] = backwards[8]
+    shake = np.arange(751) * DT
+    fast = np.tile(HOME, (len(shake), 1))
+    fast[:, 0] += 0.03 * np.sin(2 * np.pi * 4.0 * shake)  # 4 Hz, 30 mrad on joint 1
+    quick = ReplayParameters(smoothing_time=0.01, time_scale=0.4)
+    return {
+        "outside the limits": (t, near_limit, None, ("joint 2", "position", "limit")),
+        "too fast": (t, q, ReplayParameters(time_scale=0.1), ("joint 3", "speed", "time_scale")),
+        "too much torque": (shake, fast, quick, ("joint 1", "torque", "time_scale")),
+        "NaN": (t, nan, None, ("joint 4", "nan")),
+        "short": (t[:1], q[:1], None, ("at least 2 samples",)),
+        "non-increasing t": (backwards, q, None, ("not increasing", "t[9]")),
+        "wrong shape": (t, q[:, :6], None, ("shape",)),
+    }
+
+
+@pytest.mark.parametrize("case", list(refusals()))
+def test_bad_paths_are_refused_in_one_line_naming_the_joint(dyn, case):
+    """Each bad recording raises a one-line ReplayError naming the joint (or what is wrong)."""
+    t, q, parameters, words = refusals()[case]
+    with pytest.raises(ReplayError) as caught:
+        plan_replay(t, q, dyn, parameters=parameters)
+    message = str(caught.value)
+    assert "\n" not in message
+    for word in words:
+        assert word in message
+    if words[0].startswith("joint"):
+        assert caught.value.joint == int(words[0].split()[1])
+
+
+@pytest.mark.parametrize("case", ["too fast", "too much torque"])
+def test_the_suggested_time_scale_passes_and_is_close_to_the_least(dyn, case):
+    """Speed/torque refusals suggest a time_scale that passes, within 10 % of one that fails."""
+    t, q, parameters, _ = refusals()[case]
+    with pytest.raises(ReplayError) as caught:
+        plan_replay(t, q, dyn, parameters=parameters)
+    scale = caught.value.suggested_time_scale
+    assert scale > parameters.time_scale
+    base = {"smoothing_time": parameters.smoothing_time}
+    plan_replay(t, q, dyn, parameters=ReplayParameters(**base, time_scale=scale))
+    with pytest.raises(ReplayError):
+        plan_replay(t, q, dyn, parameters=ReplayParameters(**base, time_scale=scale / 1.1))
+
+
+def test_parameters_are_validated():
+    """A non-positive time_scale or bandwidth, or a negative margin, is a ParameterError."""
+    for bad in ({"time_scale": 0.0}, {"bandwidth": -1.0}, {"margin": -0.1}, {"pause_time": 0}):
+        with pytest.raises(ParameterError):
+            ReplayParameters(**bad)
+
+
+def test_progress_and_done_follow_the_clock(dyn):
+    """Progress is 0 during the approach, 1 at the path end; done 0.5 s after the end."""
+    t, q = taught_path()
+    plan = plan_replay(t, q, dyn)
+    replayer = Replayer(plan, dyn, dt=DT)
+    steps = round((2.0 + plan.duration + 0.5) / DT)
+    log = []
+    for _ in range(steps + 1):
+        q_now, qd_now, _ = replayer.reference(replayer.time)
+        replayer.step(q_now, qd_now + 1e-6 * np.random.default_rng(len(log)).normal(size=N))
+        log.append((replayer.time, replayer.progress, replayer.done))
+    times, progress, done = map(np.array, zip(*log, strict=True))
+    assert np.all(progress[times <= 2.0] == 0.0) and progress[-1] == 1.0
+    assert np.all(np.diff(progress) >= 0.0)
+    assert not done[times < 2.0 + plan.duration + 0.5 - 1e-6].any() and done[-1]
+
+
+def test_replay_is_supervised_in_holding_mode(dyn):
+    """A teaching supervisor is switched to HOLDING; a NaN reading gives the safe stop."""
+    t, q = taught_path()
+    supervisor = SafetySupervisor(dyn, DT)
+    supervisor.teach()
+    replayer = Replayer(plan_replay(t, q, dyn), dyn, dt=DT, supervisor=supervisor)
+    assert supervisor.state is SupervisorState.HOLDING
+    tau = replayer.step(q[0], np.zeros(N))
+    np.testing.assert_allclose(tau, dyn.gravity(q[0]), atol=0.05)
+    bad = q[0].copy()
+    bad[2] = np.nan
+    tau = replayer.step(bad, np.zeros(N))
+    assert supervisor.state is SupervisorState.FAULT and "joint 3" in supervisor.fault_reason
+    assert np.all(np.isfinite(tau)) and np.all(np.abs(tau) <= ROBOT.torque_limits)
+
+
+def test_replay_errors_are_zero_on_the_plan_and_exact_for_an_offset(dyn):
+    """The plan itself scores 0; a 1 mrad offset on one joint scores 1 mrad / √n RMS."""
+    t, q = taught_path()
+    plan = plan_replay(t, q, dyn)
+    t_run = 2.0 + plan.t
+    errors = replay_errors(plan, plan.q, t_run, dyn)
+    assert errors["joint_rms"] < 1e-12 and errors["tool_rms"] < 1e-12
+    offset = plan.q.copy()
+    offset[:, 4] += 1e-3
+    errors = replay_errors(plan, offset, t_run)
+    assert errors["joint_rms"] == pytest.approx(1e-3 / np.sqrt(N))
+    assert errors["joint_max"] == pytest.approx(1e-3)
+
+
+def run_replay(dyn, config: TwinConfig, q0: np.ndarray, parameters: ReplayParameters | None):
+    """Plan the taught path, replay it on a twin started at ``q0``: plan, run, replayer."""
+    t, q = taught_path()
+    plan = plan_replay(t, q, dyn, parameters=parameters)
+    twin = DigitalTwin(ROBOT, config, q0=q0)
+    replayer = Replayer(plan, dyn, dt=twin.dt)
+    run = simulate(twin, replayer, plan.parameters.approach_time + plan.duration + 0.6)
+    return plan, run, replayer
+
+
+def test_replay_on_the_twin_tracks_within_2_mrad_and_2_mm(dyn):
+    """On the twin, started at the path start: joint RMS ≤ 2 mrad, tool-path RMS ≤ 2 mm."""
+    q0 = taught_path()[1][0]
+    plan, run, replayer = run_replay(dyn, TwinConfig(seed=3), q0, None)
+    approach = round(2.0 / DT)
+    q_run = run.q_true[approach : approach + len(plan.t)]  # the same plan times
+    joint_rms = np.sqrt(np.mean((q_run - plan.q) ** 2))
+    planned = np.array([dyn.pose(row)[:3, 3] for row in plan.q])
+    flange = run.flange_position[approach : approach + len(plan.t)]
+    tool_rms = np.sqrt(np.mean(np.sum((flange - planned) ** 2, axis=1)))
+    errors = replay_errors(plan, run.q_true, run.t, dyn, run.flange_position)
+    print(f"\nreplay on the twin: joint RMS {joint_rms * 1e3:.3f} mrad (max "
+          f"{errors['joint_max'] * 1e3:.2f} mrad), tool RMS {tool_rms * 1e3:.3f} mm (max "
+          f"{errors['tool_max'] * 1e3:.2f} mm)")  # fmt: skip
+    assert joint_rms <= 2e-3 and tool_rms <= 2e-3
+    assert errors["joint_rms"] == pytest.approx(joint_rms, rel=1e-6)
+    assert errors["tool_rms"] == pytest.approx(tool_rms, rel=1e-6)
+    assert replayer.done and replayer.supervisor.state is SupervisorState.HOLDING
+    assert not replayer.supervisor.events
+
+
+def test_replay_from_elsewhere_slower_on_a_perturbed_arm(dyn):
+    """From 0.1 rad away, masses ±5 %, time_scale 1.5: the approach lands, RMS ≤ 2 mrad."""
+    q0 = taught_path()[1][0]
+    config = TwinConfig(model_error=ModelError(mass_error=0.05, com_error=0.005), seed=4)
+    offset = 0.1 * (-1.0) ** np.arange(N)
+    plan, run, replayer = run_replay(dyn, config, q0 + offset, ReplayParameters(time_scale=1.5))
+    at_start = np.argmin(np.abs(run.t - 2.0))
+    assert np.max(np.abs(run.q_true[at_start] - plan.q[0])) < 5e-3
+    errors = replay_errors(plan, run.q_true, run.t, dyn, run.flange_position)
+    print(f"\nslower, perturbed arm: joint RMS {errors['joint_rms'] * 1e3:.3f} mrad, "
+          f"tool RMS {errors['tool_rms'] * 1e3:.3f} mm")  # fmt: skip
+    assert errors["joint_rms"] <= 2e-3 and errors["tool_rms"] <= 2e-3
+    assert replayer.supervisor.state is SupervisorState.HOLDING
