@@ -156,7 +156,7 @@ def _checked_recording(t: ArrayLike, q: ArrayLike, n: int) -> tuple[FloatArray, 
     except (TypeError, ValueError) as error:
         raise ReplayError(f"recording is not numeric: {error}") from None
     if t.ndim != 1 or q.shape != (len(t), n):
-        raise ReplayError(f"expected t (N,) and q (N, {n}), got {t.shape} and {q.shape}")
+        raise ReplayError(f"expected shapes t (N,) and q (N, {n}), got {t.shape} and {q.shape}")
     if len(t) < 2:
         raise ReplayError(f"a path needs at least 2 samples, got {len(t)}")
     bad_t = np.flatnonzero(~np.isfinite(t))
@@ -167,10 +167,10 @@ def _checked_recording(t: ArrayLike, q: ArrayLike, n: int) -> tuple[FloatArray, 
         k, j = bad[0]
         raise ReplayError(f"joint {j + 1} reading at t = {t[k]:.4g} s (sample {k}) is {q[k, j]}",
                           int(j) + 1)  # fmt: skip
-    k = np.flatnonzero(np.diff(t) <= 0.0)[:1]
-    if k.size:
-        raise ReplayError(f"time not increasing: t[{k[0] + 1}] = {t[k[0] + 1]:.6g} s after "
-                          f"t[{k[0]}] = {t[k[0]]:.6g} s")  # fmt: skip
+    steps = np.flatnonzero(np.diff(t) <= 0.0)
+    if steps.size:
+        k = steps[0]
+        raise ReplayError(f"time not increasing: t[{k + 1}] = {t[k + 1]:.6g} s after t[{k}]")
     return t, q
 
 

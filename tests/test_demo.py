@@ -1,0 +1,39 @@
+"""The product end to end: teach → record → replay → report, as `make demo` runs it."""
+
+import re
+
+from leadthrough.cli import main
+
+
+def test_demo_writes_a_report_with_figures_and_replays_accurately(tmp_path, capsys):
+    """`leadthrough demo` writes the report and figures; replay within 2 mrad and 2 mm RMS."""
+    assert main(["demo", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    joint, tool = map(
+        float, re.search(r"joint RMS ([\d.]+) mrad, tool RMS ([\d.]+) mm", out).groups()
+    )
+    assert joint <= 2.0 and tool <= 2.0
+    report = (tmp_path / "report.md").read_text()
+    for figure in ("tool_paths.png", "operator_torque.png", "operator_effort.png"):
+        assert figure in report and (tmp_path / figure).stat().st_size > 10_000
+    assert (tmp_path / "session.mcap").stat().st_size > 10_000
+    assert "Supervisor events" in report
+
+
+def test_teach_then_replay_from_the_command_line(tmp_path, capsys):
+    """`teach` records a session that `replay` plays back on the twin within 2 mrad."""
+    recording = tmp_path / "taught.mcap"
+    assert main(["teach", "--path", "line", "--duration", "3", "--out", str(recording)]) == 0
+    assert recording.exists()
+    assert main(["replay", str(recording), "--out", str(tmp_path / "replay")]) == 0
+    out = capsys.readouterr().out
+    joint = float(re.search(r"joint RMS ([\d.]+) mrad", out).group(1))
+    assert joint <= 2.0
+    assert (tmp_path / "replay" / "replay.png").exists()
+
+
+def test_replay_of_a_missing_file_is_a_one_line_error(tmp_path, capsys):
+    """A recording that does not exist: exit code 2 and one line naming it."""
+    assert main(["replay", str(tmp_path / "nothing.mcap")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "nothing.mcap" in err
