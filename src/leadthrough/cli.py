@@ -132,6 +132,16 @@ def _replay(args: argparse.Namespace) -> int:
     return 0
 
 
+def _experiments(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from leadthrough.experiments_report import write_experiments
+
+    report = write_experiments(robots.load(args.robot, tip=args.tip), Path(args.out))
+    print(f"report: {report}")
+    return 0
+
+
 def _add(commands, name: str, help_text: str, description: str, epilog: str, run):
     parser = commands.add_parser(name, help=help_text, description=description, epilog=epilog,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
@@ -212,6 +222,13 @@ def build_parser() -> argparse.ArgumentParser:
     replay.add_argument("--time-scale", type=float, default=1.0, help=">1 slower, <1 faster")
     replay.add_argument("--seed", type=int, default=0)
     replay.add_argument("--out", default="out/replay", help="figure directory")
+    experiments = _add(commands, "experiments", "every thesis experiment on the twin, one report",
+                       "Reproduce the figures of thesis chapters 4-6 (SPEC §12) on the realistic"
+                       " twin into one Markdown report.",
+                       "examples:\n  leadthrough experiments --out out/experiments\n",
+                       _experiments)  # fmt: skip
+    _add_robot_arguments(experiments)
+    experiments.add_argument("--out", default="out/experiments", help="report directory")
     return parser
 
 
