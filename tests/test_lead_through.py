@@ -148,3 +148,25 @@ def test_parameters_load_from_toml(tmp_path):
     path.write_text("inertia = 0.5\n")
     with pytest.raises(lt.ParameterError, match="inertia"):
         LeadThroughParameters.from_toml(path)
+
+
+@pytest.mark.parametrize("kind", ["plane", "box"])
+def test_virtual_constraint_holds_the_tool_against_a_pull(yumi, friction, kind):
+    """A hand pulls the tool up and sideways: a plane (or a flat box) keeps it low, not stuck."""
+    from leadthrough.constraints import Box, Plane
+    from leadthrough.twin.paths import Line
+
+    start = lt.Dynamics(yumi).pose(yumi.home())[:3, 3]
+    half = np.array([0.2, 0.2, 0.02])
+    constraint = {
+        "plane": Plane(point=start, normal=(0, 0, 1)),
+        "box": Box(lower=start - half, upper=start + half),
+    }
+    rises = {}
+    for label, constraints in (("free", ()), ("constrained", (constraint[kind],))):
+        hand = Hand(Line(start, start + np.array([0.0, 0.12, 0.08]), 2.5))
+        controller = LeadThrough(yumi, friction=friction, constraints=constraints)
+        sim = simulate(DigitalTwin(yumi, operator=hand), controller, 3.0)
+        rises[label] = np.max(sim.flange_position[:, 2] - start[2])
+        assert sim.flange_position[-1, 1] - start[1] > 0.06  # it still slides along the plane
+    assert rises["constrained"] < 0.5 * rises["free"]
