@@ -220,3 +220,15 @@ def test_wrong_shape_is_a_clear_error(dyn, method):
     """A q of the wrong length raises InputShapeError naming the argument and the shapes."""
     with pytest.raises(lt.InputShapeError, match=r"q: expected shape \(7,\), got \(6,\)"):
         getattr(dyn, method)(np.zeros(6))
+
+
+def test_remembered_results_follow_q_and_cannot_be_corrupted(yumi, dyn):
+    """G and M are reused only for the same q; editing a returned array changes nothing."""
+    q = yumi.home()
+    mass = dyn.mass(q)
+    mass[:] = 0.0
+    assert np.all(np.diag(dyn.mass(q)) > 0.0)
+    q[0] += 0.5  # the same array, edited in place: a new pose
+    fresh = lt.Dynamics(yumi)
+    np.testing.assert_array_equal(dyn.mass(q), fresh.mass(q))
+    np.testing.assert_array_equal(dyn.gravity(q), fresh.gravity(q))

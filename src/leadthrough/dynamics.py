@@ -12,6 +12,8 @@ class (see the friction model).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
@@ -41,15 +43,37 @@ class Dynamics:
         self.n = robot.n_joints
         self._flange = self.model.getFrameId(FLANGE_FRAME)
         self._upper_triangle = np.triu(np.ones((self.n, self.n), dtype=bool))
+        self._last: dict[str, tuple[bytes, FloatArray]] = {}
 
     def gravity(self, q: ArrayLike) -> FloatArray:
         """Gravity torque G(q) [Nm], shape (n,): the torque that holds the arm still."""
-        return pin.computeGeneralizedGravity(self.model, self.data, self._vector(q, "q")).copy()
+        return self._remembered("gravity", self._vector(q, "q"), self._gravity)
 
     def mass(self, q: ArrayLike) -> FloatArray:
         """Joint-space inertia matrix M(q) [kg m²], (n, n), rotor inertias included."""
-        upper = pin.crba(self.model, self.data, self._vector(q, "q"))
+        return self._remembered("mass", self._vector(q, "q"), self._mass)
+
+    def _gravity(self, q: FloatArray) -> FloatArray:
+        return pin.computeGeneralizedGravity(self.model, self.data, q).copy()
+
+    def _mass(self, q: FloatArray) -> FloatArray:
+        upper = pin.crba(self.model, self.data, q)
         return np.where(self._upper_triangle, upper, upper.T)
+
+    def _remembered(
+        self, name: str, q: FloatArray, compute: Callable[[FloatArray], FloatArray]
+    ) -> FloatArray:
+        """``compute(q)``, reused while ``q`` is unchanged; always a fresh copy.
+
+        Several components of one control step (feed-forward, observer, admittance,
+        supervisor) ask for G and M at the same q: it is computed once.
+        """
+        key = q.tobytes()
+        last = self._last.get(name)
+        if last is None or last[0] != key:
+            last = (key, compute(q))
+            self._last[name] = last
+        return last[1].copy()
 
     def coriolis(self, q: ArrayLike, qd: ArrayLike) -> FloatArray:
         """Coriolis/centrifugal matrix C(q, q̇) [kg m²/s], (n, n), Christoffel form."""

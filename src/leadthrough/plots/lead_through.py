@@ -6,7 +6,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from leadthrough.plots import pyplot
+from leadthrough.plots import label_torque_and_velocity, pyplot
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -72,11 +72,7 @@ def plot_damping(runs: dict[str, GuidedRun], joint: int) -> Figure:
         top.set_title(label)
         top.legend(fontsize="small")
         bottom.plot(sim.t, sim.qd_true[:, joint], label="velocity")
-        bottom.set_xlabel("t [s]")
-        top.set_ylabel("torque [Nm]")
-        bottom.set_ylabel("velocity [rad/s]")
-        for axis in (top, bottom):
-            axis.grid(alpha=0.3)
+        label_torque_and_velocity(top, bottom)
     return figure
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from leadthrough.plots import pyplot
+from leadthrough.plots import label_torque_and_velocity, pyplot
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -54,11 +54,7 @@ def plot_breakaway(result: BreakawayResult) -> Figure:
         top.set_title(f"joint {j + 1}, {key.replace('_', ' ')}")
         top.legend(fontsize="small")
         bottom.plot(sim.t, sim.qd_true[:, j], color="tab:green")
-        bottom.set_xlabel("t [s]")
-        top.set_ylabel("torque [Nm]")
-        bottom.set_ylabel("velocity [rad/s]")
-        for axis in (top, bottom):
-            axis.grid(alpha=0.3)
+        label_torque_and_velocity(top, bottom)
     return figure
 
 
