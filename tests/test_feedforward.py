@@ -186,3 +186,33 @@ def test_reset_does_not_alter_returned_torques(dynamics, friction):
     assert np.all(before != 0.0)
     feedforward.reset()
     np.testing.assert_array_equal(logged[-1].dither, before)
+
+
+def test_dither_parks_when_nobody_guides_and_resumes_on_motion(friction):
+    """Every joint at rest for park_time: no dither; one joint moves: the others dither again."""
+    settings = DitherParameters(park_time=1.0)
+    dither = Dither(friction, DT, settings)
+    still = np.zeros(N)
+    before = [dither.step(still) for _ in range(round(1.0 / DT) - 1)]
+    assert np.all(np.abs(before[-1]) > 0.0) and not dither.parked
+    parked = [dither.step(still) for _ in range(50)]
+    assert dither.parked and np.all(np.array(parked) == 0.0)
+    moving = still.copy()
+    moving[2] = 0.1
+    resumed = dither.step(moving)
+    assert not dither.parked and resumed[2] == 0.0
+    later = [dither.step(moving) for _ in range(round(settings.rest_time / DT))][-1]
+    assert np.all(np.abs(np.delete(later, 2)) > 0.0)  # the resting joints dither again
+
+
+def test_dither_without_park_time_never_parks(friction):
+    """park_time None: the thesis' dither, at rest for ever."""
+    dither = Dither(friction, DT, DitherParameters(park_time=None))
+    torques = [dither.step(np.zeros(N)) for _ in range(round(10.0 / DT))]
+    assert not dither.parked and np.all(np.abs(torques[-1]) > 0.0)
+
+
+def test_park_time_must_be_positive():
+    """A zero or negative park time is a one-line parameter error."""
+    with pytest.raises(lt.errors.ParameterError, match="park_time"):
+        DitherParameters(park_time=0.0)

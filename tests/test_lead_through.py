@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
+from leadthrough.dither import DitherParameters
 from leadthrough.lead_through import LeadThrough
 from leadthrough.lead_through_experiments import (
     end_stop,
@@ -14,10 +15,11 @@ from leadthrough.lead_through_experiments import (
 from leadthrough.lead_through_parameters import LeadThroughParameters
 from leadthrough.safety import SupervisorState
 from leadthrough.session_operator import teaching_session_operator
+from leadthrough.twin.model_error import ModelError
 from leadthrough.twin.operator import Hand
 from leadthrough.twin.paths import MinimumJerk
 from leadthrough.twin.runner import simulate
-from leadthrough.twin.simulator import DigitalTwin
+from leadthrough.twin.simulator import DigitalTwin, TwinConfig
 
 
 @pytest.fixture(scope="module")
@@ -45,6 +47,24 @@ def test_released_arm_stops_within_half_a_second_and_stays(yumi, friction):
     result = release_and_stay(yumi, friction)
     assert result.stop_time <= 0.5
     assert result.drift < 1e-3
+
+
+@pytest.mark.parametrize("mass_scale", [0.95, 1.05])
+def test_released_arm_stays_with_every_mass_off_by_5_percent(yumi, mass_scale):
+    """Every link 5 % lighter or heavier than modelled, friction from the description."""
+    config = TwinConfig(model_error=ModelError(mass_scale=mass_scale), seed=1)
+    result = release_and_stay(yumi, None, config)
+    assert result.stop_time <= 0.5
+    assert result.drift < 1e-3
+
+
+def test_parking_the_dither_keeps_a_wrong_model_still(yumi):
+    """A dithered joint under an unmodelled load creeps: parked, it stays put."""
+    config = TwinConfig(model_error=ModelError(mass_scale=0.95), seed=1)
+    always = LeadThroughParameters(dither=DitherParameters(park_time=None))
+    creeping = release_and_stay(yumi, None, config, always)
+    parked = release_and_stay(yumi, None, config)
+    assert parked.drift < creeping.drift / 3.0
 
 
 def test_sixty_second_session_is_stable(yumi, friction):

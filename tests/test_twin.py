@@ -228,6 +228,14 @@ def test_friction_scale_scales_true_friction(yumi):
     np.testing.assert_allclose(scaled.friction.params.viscous, 1.2 * nominal.viscous)
 
 
+def test_mass_scale_scales_every_link(yumi):
+    """mass_scale multiplies every link mass and inertia (a systematic error)."""
+    heavy = DigitalTwin(yumi, TwinConfig(model_error=ModelError(mass_scale=1.05))).true_robot
+    np.testing.assert_allclose(heavy.masses, 1.05 * np.array(yumi.masses), rtol=1e-12)
+    for true, nominal in zip(heavy.joints, yumi.joints, strict=True):
+        np.testing.assert_allclose(true.link.inertia, 1.05 * nominal.link.inertia, rtol=1e-12)
+
+
 def test_bad_commands_are_refused(yumi):
     """A NaN command is a drive fault (TwinError); a wrong shape an InputShapeError."""
     twin = DigitalTwin(yumi)

@@ -31,12 +31,17 @@ class DitherParameters:
         moving_velocity: A joint moves above this speed [rad/s]: dither off at once, and the
             friction compensation dead-band while dithering.
         rest_time: Time below ``moving_velocity`` before the dither comes back [s].
+        park_time: Once *every* joint has rested this long, nobody is guiding the arm: the
+            dither stops until a joint moves again [s]; None dithers at rest for ever (the
+            thesis). A dithered joint under a static load the model does not know (a mass
+            error) creeps, so an arm left alone would not stay where it was put.
     """
 
     frequency: float = 15.0
     amplitude: float = 0.3
     moving_velocity: float = 0.01
     rest_time: float = 0.2
+    park_time: float | None = 2.0
 
     def __post_init__(self) -> None:
         real("frequency", self.frequency, minimum=0.0, strict=True, error=ParameterError)
@@ -45,6 +50,8 @@ class DitherParameters:
             raise ParameterError("amplitude", "must stay below 1 (it must not move the joint)")
         real("moving_velocity", self.moving_velocity, minimum=0, strict=True, error=ParameterError)
         real("rest_time", self.rest_time, minimum=0.0, error=ParameterError)
+        if self.park_time is not None:
+            real("park_time", self.park_time, minimum=0.0, strict=True, error=ParameterError)
 
 
 class Dither:
@@ -63,6 +70,8 @@ class Dither:
         self.friction = friction
         self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
         self._rest_needed = round(self.parameters.rest_time / self.dt)  # whole periods
+        park_time = self.parameters.park_time
+        self._quiet_needed = None if park_time is None else round(park_time / self.dt)
         self.reset()
 
     def reset(self) -> None:
@@ -70,13 +79,20 @@ class Dither:
         self._time = 0.0
         self._rest = np.full(self.friction.n_joints, self._rest_needed)  # periods at rest
         self.active = np.ones(self.friction.n_joints, dtype=bool)
+        self._quiet = 0  # periods with every joint at rest
+
+    @property
+    def parked(self) -> bool:
+        """Whether every joint has rested for ``park_time``: the dither is off."""
+        return self._quiet_needed is not None and self._quiet >= self._quiet_needed
 
     def step(self, qd: ArrayLike, q: ArrayLike | None = None) -> FloatArray:
         """Dither torque [Nm] for this period, zero on moving joints."""
         p = self.parameters
         still = np.abs(np.asarray(qd, dtype=float)) < p.moving_velocity
         self._rest = np.where(still, self._rest + 1, 0)
-        self.active = self._rest >= self._rest_needed
+        self._quiet = self._quiet + 1 if np.all(still) else 0
+        self.active = (self._rest >= self._rest_needed) & ~self.parked
         wave = 1.0 if np.sin(2.0 * np.pi * p.frequency * self._time) >= 0.0 else -1.0
         self._time += self.dt
         return np.where(self.active, wave * p.amplitude * self.friction.coulomb_level(q), 0.0)

@@ -230,7 +230,10 @@ def breakaway_with_and_without_dither(
     coulomb = float(friction.coulomb[joint])
     operator = TorqueProfile(joint, (ramp(0.5, 0.5 + 4.0, 2.0 * coulomb),))
     runs, breakaway, delay = {}, {}, {}
-    for key, setting in (("no_dither", None), ("dither", dither or DitherParameters())):
+    for key, setting in (
+        ("no_dither", None),
+        ("dither", dither or DitherParameters(park_time=None)),
+    ):
         run = _run(robot, friction, operator, 4.0, joint, config, dither=setting)
         t, truth = run.simulation.t, run.simulation.tau_ext[:, joint]
         estimate = run.estimates["kalman_time_varying"][:, joint]
@@ -278,7 +281,7 @@ def dither_frequency_sweep(
     noise, vibration, drift = [], [], []
     for frequency in frequencies:
         run = _run(robot, friction, Operator(), duration, 0, config,
-                   dither=DitherParameters(frequency=float(frequency)))  # fmt: skip
+                   dither=DitherParameters(frequency=float(frequency), park_time=None))  # fmt: skip
         sim = run.simulation
         settled = sim.t > 0.5
         noise.append(float(np.sqrt(np.mean(sim.qd[settled] ** 2))))
