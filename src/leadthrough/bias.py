@@ -65,6 +65,12 @@ class ModelErrorBias:
             self.confidence += rate * (1.0 - self.confidence)
         return estimate - self.bias
 
+    def calibrate(self, bias: FloatArray, gravity: FloatArray) -> None:
+        """Take a bias measured by the start-up calibration at a pose where G = ``gravity``."""
+        self.bias = np.array(bias, dtype=float)
+        self._gravity_learned = np.array(gravity, dtype=float)
+        self.confidence = 1.0
+
     def tolerance(self, gravity: FloatArray) -> FloatArray:
         """Error that may remain after removing the bias [Nm].
 

@@ -7,6 +7,7 @@ inside the model. Every array is read-only, so a description can be shared freel
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -303,6 +304,26 @@ class RobotDescription:
         """Total moving mass [kg]."""
         return float(np.sum(self.masses))
 
+    def with_payload(self, mass: float, com: ArrayLike = (0.0, 0.0, 0.0)) -> RobotDescription:
+        """This robot carrying a point mass rigidly at the flange, lumped into the last link.
+
+        Args:
+            mass: Payload mass [kg], >= 0.
+            com: Its position in the flange frame [m].
+        """
+        mass = check.real("payload mass", mass, minimum=0.0)
+        if mass == 0.0:
+            return self
+        link = self.joints[-1].link
+        at = self.flange.translation + self.flange.rotation @ check.real_array("com", com, (3,))
+        total = link.mass + mass
+        centre = (link.mass * link.com + mass * at) / total
+        inertia = (link.inertia + _point_inertia(link.mass, link.com - centre)
+                   + _point_inertia(mass, at - centre))  # fmt: skip
+        carried = dataclasses.replace(link, mass=total, com=centre, inertia=inertia)
+        last = dataclasses.replace(self.joints[-1], link=carried)
+        return dataclasses.replace(self, joints=(*self.joints[:-1], last))
+
     def home(self) -> FloatArray:
         """Joint readings of the home pose [rad] (a fresh, writable array)."""
         if self.home_position is not None:
@@ -313,3 +334,8 @@ class RobotDescription:
         array = np.array([get(joint) for joint in self.joints], dtype=float)
         array.setflags(write=False)
         return array
+
+
+def _point_inertia(mass: float, offset: FloatArray) -> FloatArray:
+    """Inertia of a point mass at ``offset`` from a point [kg m²] (parallel-axis term)."""
+    return mass * (float(offset @ offset) * np.eye(3) - np.outer(offset, offset))

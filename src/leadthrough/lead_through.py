@@ -32,6 +32,7 @@ from leadthrough.admittance import (
     tracking_torque,
 )
 from leadthrough.bias import ModelErrorBias
+from leadthrough.calibration import Calibration, CalibrationRun
 from leadthrough.constraints import VirtualConstraint, constraint_torque
 from leadthrough.description import FloatArray, RobotDescription
 from leadthrough.dynamics import Dynamics
@@ -40,7 +41,7 @@ from leadthrough.feedforward import PassiveFeedForward
 from leadthrough.friction_model import FrictionModel
 from leadthrough.lead_through_parameters import LeadThroughParameters, Mode
 from leadthrough.observer import MomentumObserver
-from leadthrough.safety import SafetySupervisor, SupervisorState
+from leadthrough.safety import SafetyEvent, SafetySupervisor, SupervisorState
 
 
 class LeadThrough:
@@ -67,31 +68,37 @@ class LeadThrough:
         parameters = parameters or LeadThroughParameters()
         if mode is not None and mode != parameters.mode:
             parameters = LeadThroughParameters(**{**parameters.__dict__, "mode": mode})
-        self.parameters = p = parameters
+        self.parameters = parameters
         self.robot, self.dt = robot, dt
-        self.dynamics = Dynamics(robot)
-        self.friction = friction or FrictionModel.from_robot(robot)
-        if self.friction.n_joints != robot.n_joints:
-            raise ParameterError("friction", f"has {self.friction.n_joints} joints, the robot "
+        friction = friction or FrictionModel.from_robot(robot)
+        if friction.n_joints != robot.n_joints:
+            raise ParameterError("friction", f"has {friction.n_joints} joints, the robot "
                                              f"{robot.n_joints}")  # fmt: skip
+        self.nominal_friction = friction
         self.constraints = tuple(constraints)
-        self.feed_forward = PassiveFeedForward(self.dynamics, self.friction, dt, p.compensation,
+        self.supervisor = SafetySupervisor(Dynamics(robot), dt, parameters.safety)
+        self._reference_low = robot.q_min + parameters.limit_zone
+        self._reference_high = robot.q_max - parameters.limit_zone
+        self.reset()
+
+    def _build(self, robot: RobotDescription, friction: FrictionModel) -> None:
+        """The model-based parts, for the model of ``robot`` (and a payload) and ``friction``."""
+        p = self.parameters
+        self.dynamics = Dynamics(robot)
+        self.friction = friction
+        self.feed_forward = PassiveFeedForward(self.dynamics, friction, self.dt, p.compensation,
                                                p.dither, p.measurement_delay)  # fmt: skip
-        self.observer = MomentumObserver(self.dynamics, self.friction, dt, p.observer)
-        self.supervisor = SafetySupervisor(self.dynamics, dt, p.safety)
+        self.observer = MomentumObserver(self.dynamics, friction, self.dt, p.observer)
         inertia = np.diag(self.dynamics.mass(robot.home()))
         self.virtual_damping = np.maximum(inertia / p.damping_time,
-                                          self.friction.coulomb / p.coulomb_speed)  # fmt: skip
+                                          friction.coulomb / p.coulomb_speed)  # fmt: skip
         self.kp = inertia * (2.0 * np.pi * p.position_bandwidth) ** 2
         self.kd = inertia / p.velocity_time
-        relative = (self.friction.relative_error if p.friction_uncertainty is None
+        relative = (friction.relative_error if p.friction_uncertainty is None
                     else np.full(robot.n_joints, p.friction_uncertainty))  # fmt: skip
         relative = np.maximum(relative, p.stiction_margin)
-        self._friction_tolerance = relative * self.friction.coulomb + 2.0 * self.friction.noise_std
+        self._friction_tolerance = relative * friction.coulomb + 2.0 * friction.noise_std
         self._speed_cap = p.assist_speed_fraction * robot.velocity_limits
-        self._reference_low = robot.q_min + p.limit_zone
-        self._reference_high = robot.q_max - p.limit_zone
-        self.reset()
 
     # --- state a user may read ---------------------------------------------------------
 
@@ -125,23 +132,32 @@ class LeadThrough:
         """Supervisor state: teaching, holding or fault."""
         return self.supervisor.state
 
+    @property
+    def calibrating(self) -> bool:
+        """Whether the start-up calibration is running (nobody may touch the arm)."""
+        return self._calibrating
+
     def reset(self) -> None:
-        """Start afresh (filters, references, bias); a latched fault is cleared too."""
-        n = self.robot.n_joints
-        self.feed_forward.reset()
-        self.observer.reset()
+        """Start afresh: nominal model, filters, references, bias, calibration; a latched
+        fault is cleared too.
+        """
+        self._build(self.robot, self.nominal_friction)
         self.supervisor.reset()
         self.supervisor.teach()
         p = self.parameters
+        n = self.robot.n_joints
         self.model_error = ModelErrorBias(n, p.bias_time, p.mass_uncertainty,
                                           p.compensation.full_velocity)  # fmt: skip
         self._drive = np.zeros(n)
         self._idle = 0.0
         self._references: AdmittanceState | None = None
-        self._sent = deque([np.zeros(n)] * max(self.parameters.measurement_delay, 1),
-                           maxlen=max(self.parameters.measurement_delay, 1))  # fmt: skip
+        self._sent = deque([np.zeros(n)] * max(p.measurement_delay, 1),
+                           maxlen=max(p.measurement_delay, 1))  # fmt: skip
         self._time = 0.0
         self.last_feed_forward = None
+        self.calibration: Calibration | None = None
+        self._calibration_run: CalibrationRun | None = None
+        self._calibrating = p.calibration is not None  # the supervisor stays in TEACHING
 
     # --- the control step --------------------------------------------------------------
 
@@ -161,7 +177,8 @@ class LeadThrough:
         if not supervisor.check(self._time, q, qd, tau_measured):
             return self._send(supervisor.command(self._time, q, qd, np.zeros(self.robot.n_joints)))
         try:
-            desired = self._control(np.asarray(q, float), np.asarray(qd, float), tau_measured)
+            control = self._calibrate if self._calibrating else self._control
+            desired = control(np.asarray(q, float), np.asarray(qd, float), tau_measured)
         except Exception:  # nothing escapes without the safe stop: a NaN command faults
             desired = np.full(self.robot.n_joints, np.nan)
         return self._send(supervisor.command(self._time, q, qd, desired))
@@ -169,6 +186,35 @@ class LeadThrough:
     def _send(self, command: FloatArray) -> FloatArray:
         self._sent.append(command.copy())
         return command
+
+    def _calibrate(
+        self, q: FloatArray, qd: FloatArray, tau_measured: ArrayLike | None
+    ) -> FloatArray:
+        """One period of the start-up calibration (:mod:`leadthrough.calibration`)."""
+        if self._calibration_run is None:
+            self._calibration_run = CalibrationRun(self.dynamics, self.friction, q,
+                                                   self.parameters.calibration)  # fmt: skip
+            self._calibration_start = self._time
+        run, t = self._calibration_run, self._time - self._calibration_start
+        applied = self._sent[0] if tau_measured is None else np.asarray(tau_measured, float)
+        run.record(t, qd, self.observer.update(q, qd, applied))
+        command = run.command(t, q, qd)
+        if t >= run.duration or run.disturbance is not None:
+            self._finish_calibration(run.result())
+            return self._control(q, qd, tau_measured) if run.disturbance else command
+        return command
+
+    def _finish_calibration(self, calibration: Calibration) -> None:
+        """Use what the calibration measured: payload, friction levels, bias at the pose."""
+        self.calibration, self._calibrating = calibration, False
+        if not calibration.accepted:
+            self.supervisor.events.append(
+                SafetyEvent(self._time, "calibration", calibration.reason)
+            )
+            return
+        robot = calibration.robot(self.robot)
+        self._build(robot, calibration.friction(self.nominal_friction))
+        self.model_error.calibrate(calibration.bias, self.dynamics.gravity(calibration.pose))
 
     def _control(self, q: FloatArray, qd: FloatArray, tau_measured: ArrayLike | None) -> FloatArray:
         feed_forward = self.feed_forward.step(q, qd)

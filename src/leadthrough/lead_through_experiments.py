@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from leadthrough.calibration import CalibrationParameters
 from leadthrough.description import FloatArray, RobotDescription
 from leadthrough.dynamics import Dynamics
 from leadthrough.feedforward import GravityCompensation
@@ -28,6 +29,8 @@ from leadthrough.twin.scenarios import scenario
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig
 
 PATHS = ("line", "circle", "point_to_point")
+#: The operator grabs the arm once lead-through has calibrated, in every mode alike [s].
+GRAB_TIME = CalibrationParameters().duration
 MODES = ("none", "passive", "active")
 
 
@@ -51,6 +54,11 @@ class Recorder:
         self.log["operator"].append(self.controller.operator_torque)
         self.log["command"].append(command)
         return command
+
+    def drop_first(self, count: int) -> None:
+        """Forget the first ``count`` periods (before the operator grabbed the arm)."""
+        for values in self.log.values():
+            del values[:count]
 
     def arrays(self) -> dict[str, FloatArray]:
         """The log as arrays (N, n)."""
@@ -104,9 +112,8 @@ def guided_run(
 ) -> GuidedRun:
     """One path with one controller on the twin."""
     chosen = scenario(path, robot, config)
-    twin = chosen.twin(robot)
     controller = _controller(robot, mode, friction, parameters)
-    sim = simulate(twin, controller, chosen.duration)
+    sim = _guided(robot, chosen.config, chosen.operator, chosen.q0, controller, chosen.duration)
     reference = chosen.operator.path
     targets = np.array([reference.position(t) for t in sim.t])
     distance = np.linalg.norm(sim.flange_position - targets, axis=1)
@@ -157,23 +164,45 @@ def effort_comparison(
     return EffortComparison(runs)
 
 
-class _ThenLetGo(Operator):
-    """An operator that acts until ``release`` [s], then lets go."""
+class _Window(Operator):
+    """An operator that grabs the arm at ``start`` (its own clock starts then) and lets go
+    at ``stop`` [s].
+    """
 
-    def __init__(self, operator: Operator, release: float) -> None:
-        self.operator, self.release = operator, release
+    def __init__(self, operator: Operator, start: float, stop: float = np.inf) -> None:
+        self.operator, self.start, self.stop = operator, start, stop
 
     def wrench(self, t: float, flange_pose: FloatArray, flange_velocity: FloatArray) -> FloatArray:
-        """The operator's wrench before the release, zero after."""
-        if t >= self.release:
+        """The operator's wrench inside the window, zero outside."""
+        if not self.start <= t < self.stop:
             return np.zeros(6)
-        return self.operator.wrench(t, flange_pose, flange_velocity)
+        return self.operator.wrench(t - self.start, flange_pose, flange_velocity)
 
     def joint_torque(self, t: float, q: FloatArray, qd: FloatArray) -> FloatArray:
-        """The operator's joint torque before the release, zero after."""
-        if t >= self.release:
+        """The operator's joint torque inside the window, zero outside."""
+        if not self.start <= t < self.stop:
             return np.zeros(len(q))
-        return self.operator.joint_torque(t, q, qd)
+        return self.operator.joint_torque(t - self.start, q, qd)
+
+
+def _guided(
+    robot: RobotDescription,
+    config: TwinConfig,
+    operator: Operator,
+    q0: FloatArray,
+    controller: object,
+    duration: float,
+    release: float = np.inf,
+) -> SimulationResult:
+    """The operator grabs the arm once lead-through is ready (:data:`GRAB_TIME`), acts for
+    ``release`` [s] and lets go; the signals from the grab on, with t = 0 at the grab.
+    """
+    twin = DigitalTwin(robot, config, _Window(operator, GRAB_TIME, GRAB_TIME + release), q0)
+    whole = simulate(twin, controller, GRAB_TIME + duration)
+    sim = whole.after(GRAB_TIME)
+    if isinstance(controller, Recorder):
+        controller.drop_first(len(whole.t) - len(sim.t))
+    return sim
 
 
 @dataclass(frozen=True, eq=False)
@@ -204,9 +233,9 @@ def release_and_stay(
     """A hand pulls the tool 15 cm, lets go at speed; measure the stop and the drift."""
     chosen = scenario("line", robot, config)
     release = 0.75 * chosen.operator.path.duration  # while the tool still moves
-    twin = DigitalTwin(robot, config, _ThenLetGo(chosen.operator, release), chosen.q0)
     controller = _controller(robot, mode, friction, parameters)
-    sim = simulate(twin, controller, release + 0.5 + rest)
+    sim = _guided(robot, config, chosen.operator, chosen.q0, controller, release + 0.5 + rest,
+                  release)  # fmt: skip
     after = sim.t >= release
     moving = np.flatnonzero(after & np.any(np.abs(sim.qd_true) > 0.01, axis=1))
     stop_time = float(sim.t[moving[-1]] - release) if moving.size else 0.0
@@ -247,9 +276,8 @@ def end_stop(
     hand = JointHand(joint, JointMinimumJerk(start[joint], target, duration=2.0),
                      stiffness=5.0, max_torque=1.0)  # fmt: skip
     release = 3.0
-    twin = DigitalTwin(robot, config, _ThenLetGo(hand, release), start)
     controller = _controller(robot, "active", friction, parameters)
-    sim = simulate(twin, controller, release + 4.0)
+    sim = _guided(robot, config, hand, start, controller, release + 4.0, release)
     angle = sim.q_true[:, joint]
     after = sim.t >= release
     travel = float(np.max(np.abs(angle[after] - angle[after][0])))
@@ -278,9 +306,8 @@ def _joint_run(robot: RobotDescription, joint: int, friction: FrictionModel | No
                config: TwinConfig, parameters: LeadThroughParameters) -> GuidedRun:  # fmt: skip
     home = robot.home()
     hand = JointHand(joint, JointMinimumJerk(home[joint], home[joint] + 0.6, duration=2.0))
-    twin = DigitalTwin(robot, config, hand, home)
     controller = _controller(robot, "active", friction, parameters)
-    sim = simulate(twin, controller, 3.0)
+    sim = _guided(robot, config, hand, home, controller, 3.0)
     torque = sim.tau_operator[:, joint]
     return GuidedRun(f"joint {joint + 1}", "active", sim, float(np.sqrt(np.mean(torque**2))),
                      float(np.abs(torque).max()), np.nan, np.nan, controller.arrays())  # fmt: skip

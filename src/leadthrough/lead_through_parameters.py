@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
+from leadthrough.calibration import CalibrationParameters
 from leadthrough.dither import DitherParameters
 from leadthrough.errors import ParameterError
 from leadthrough.friction_compensation import CoulombCompensationParameters
@@ -43,6 +44,8 @@ class LeadThroughParameters:
         mode: ``"passive"`` (feed-forward only) or ``"active"`` (admittance on top).
         compensation: Coulomb compensation law (ε, q̇₀, q̇₁), thesis §4.2.2.
         dither: Dither settings, or None for no dithering (thesis §5.3).
+        calibration: Start-up calibration (payload, friction levels, gravity bias), or None
+            to start guiding at once with the model as given.
         observer: Kalman observer tuning (thesis §5.2.1).
         safety: Safety supervisor limits (SPEC §7).
         inertia_scale: k_M of M̃ = k_M M(q) [–]: how heavy the arm feels.
@@ -83,6 +86,7 @@ class LeadThroughParameters:
         default_factory=CoulombCompensationParameters
     )
     dither: DitherParameters | None = field(default_factory=DitherParameters)
+    calibration: CalibrationParameters | None = field(default_factory=CalibrationParameters)
     observer: ObserverParameters = field(default_factory=ObserverParameters)
     safety: SafetyParameters = field(default_factory=SafetyParameters)
     inertia_scale: float = 0.3
@@ -151,7 +155,10 @@ class LeadThroughParameters:
 
 
 _NESTED = {"compensation": CoulombCompensationParameters, "dither": DitherParameters,
-           "observer": ObserverParameters, "safety": SafetyParameters}  # fmt: skip
+           "observer": ObserverParameters, "safety": SafetyParameters,
+           "calibration": CalibrationParameters}  # fmt: skip
+#: Nested tables that ``false`` switches off.
+_OPTIONAL = ("dither", "calibration")
 
 
 def from_dict(kind: type, data: dict[str, Any], where: str) -> Any:
@@ -165,7 +172,7 @@ def from_dict(kind: type, data: dict[str, Any], where: str) -> Any:
         nested = _NESTED.get(name) if kind is LeadThroughParameters else None
         if nested is not None and isinstance(value, dict):
             value = from_dict(nested, value, f"{where}: {name}")
-        if name == "dither" and value is False:
+        if name in _OPTIONAL and value is False:
             value = None
         values[name] = value
     try:

@@ -60,6 +60,13 @@ class SimulationResult:
         """Norm of the hand force [N], (N,)."""
         return np.linalg.norm(self.operator_wrench[:, :3], axis=1)
 
+    def after(self, start: float) -> SimulationResult:
+        """The rows from ``start`` [s] on, with time counted from ``start``."""
+        keep = self.t >= start - 1e-9
+        rows = {field.name: getattr(self, field.name)[keep] for field in fields(self)}
+        rows["t"] = rows["t"] - start
+        return SimulationResult(**rows)
+
     def plot(self, joints: list[int] | None = None) -> Figure:
         """Figure of joint angles, torques and the operator force (see ``twin.plots``)."""
         from leadthrough.plots.simulation import plot_simulation
