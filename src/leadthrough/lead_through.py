@@ -138,8 +138,9 @@ class LeadThrough:
         return self._calibrating
 
     def reset(self) -> None:
-        """Start afresh: nominal model, filters, references, bias, calibration; a latched
-        fault is cleared too.
+        """Start afresh: nominal model, filters, references, bias and calibration.
+
+        A latched fault is cleared too.
         """
         self._build(self.robot, self.nominal_friction)
         self.supervisor.reset()

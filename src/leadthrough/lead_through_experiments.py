@@ -165,8 +165,9 @@ def effort_comparison(
 
 
 class _Window(Operator):
-    """An operator that grabs the arm at ``start`` (its own clock starts then) and lets go
-    at ``stop`` [s].
+    """An operator that grabs the arm at ``start`` and lets go at ``stop`` [s].
+
+    Its own clock starts at the grab.
     """
 
     def __init__(self, operator: Operator, start: float, stop: float = np.inf) -> None:
@@ -194,8 +195,10 @@ def _guided(
     duration: float,
     release: float = np.inf,
 ) -> SimulationResult:
-    """The operator grabs the arm once lead-through is ready (:data:`GRAB_TIME`), acts for
-    ``release`` [s] and lets go; the signals from the grab on, with t = 0 at the grab.
+    """The operator grabs the arm once lead-through is ready, acts, lets go.
+
+    The operator grabs at :data:`GRAB_TIME` and lets go ``release`` [s] later; the
+    signals are returned from the grab on, with t = 0 at the grab.
     """
     twin = DigitalTwin(robot, config, _Window(operator, GRAB_TIME, GRAB_TIME + release), q0)
     whole = simulate(twin, controller, GRAB_TIME + duration)
