@@ -1,0 +1,126 @@
+"""Start-up calibration: payload, Coulomb levels and gravity bias, measured on the twin."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import leadthrough as lt
+from leadthrough.calibration import CalibrationParameters
+from leadthrough.lead_through import LeadThrough
+from leadthrough.lead_through_experiments import release_and_stay
+from leadthrough.lead_through_parameters import LeadThroughParameters
+from leadthrough.safety import SupervisorState
+from leadthrough.twin.mjcf import Payload
+from leadthrough.twin.model_error import ModelError
+from leadthrough.twin.operator import Hand
+from leadthrough.twin.paths import MinimumJerk
+from leadthrough.twin.runner import simulate
+from leadthrough.twin.simulator import DigitalTwin, TwinConfig
+
+MASSES_OFF = ModelError(mass_error=0.05, com_error=0.005)
+
+
+@pytest.fixture(scope="module")
+def yumi() -> lt.RobotDescription:
+    """The shipped YuMi description."""
+    return lt.robots.yumi()
+
+
+def calibrated(yumi, config, friction=None, seconds=1.5):
+    """A controller that calibrated on a twin nobody touches, and the run."""
+    twin = DigitalTwin(yumi, config)
+    controller = LeadThrough(yumi, friction=friction)
+    return controller, twin, simulate(twin, controller, seconds)
+
+
+def test_gravity_error_and_friction_levels_match_the_truth(yumi, identified_friction):
+    """Friction 20 % below the identified model: both errors measured, nothing assumed."""
+    config = TwinConfig(model_error=dataclasses.replace(MASSES_OFF, friction_scale=0.8), seed=7)
+    controller, twin, _ = calibrated(yumi, config, identified_friction)
+    result = controller.calibration
+    assert result.accepted and not controller.calibrating
+    truth = lt.Dynamics(yumi).gravity(result.pose) - lt.Dynamics(twin.true_robot).gravity(
+        result.pose
+    )
+    np.testing.assert_allclose(result.gravity_error, truth, atol=0.03)
+    np.testing.assert_allclose(result.friction_scale[:4], 0.8, atol=0.05)  # the heavy joints
+    np.testing.assert_allclose(controller.friction.coulomb,
+                               identified_friction.coulomb * result.friction_scale)  # fmt: skip
+
+
+def test_unknown_payload_is_found_and_held(yumi):
+    """An unmodelled 0.5 kg payload: weighed at start-up, the arm left alone stays put."""
+    config = TwinConfig(model_error=dataclasses.replace(MASSES_OFF, payload=Payload(0.5)), seed=1)
+    controller, twin, sim = calibrated(yumi, config, seconds=6.0)
+    assert controller.calibration.payload == pytest.approx(0.5, rel=0.1)
+    settled = sim.t > 1.5
+    assert np.max(np.abs(sim.q_true[settled] - sim.q_true[settled][0])) < 1e-3
+    # the same arm without the calibration sags under the payload
+    blind = LeadThrough(yumi, parameters=LeadThroughParameters(calibration=None))
+    sagging = simulate(DigitalTwin(yumi, config), blind, 6.0)
+    assert np.max(np.abs(sagging.q_true[-1] - sagging.q_true[0])) > 0.05
+
+
+def test_released_arm_stops_on_a_plant_with_less_friction(yumi, identified_friction):
+    """Identified friction, plant friction 20 % lower: calibrated, the released arm stays."""
+    config = TwinConfig(model_error=dataclasses.replace(MASSES_OFF, friction_scale=0.8), seed=7)
+    result = release_and_stay(yumi, identified_friction, config)
+    assert result.stop_time <= 0.5
+    assert result.drift < 1e-3
+
+
+def test_touching_the_arm_during_calibration_refuses_it_and_never_faults(yumi):
+    """A push during the calibration: refused at once with a one-line reason, guiding goes on."""
+    start = lt.Dynamics(yumi).pose(yumi.home())[:3, 3]
+    hand = Hand(MinimumJerk(start, start + np.array([0.0, 0.1, 0.0]), duration=0.5))
+    controller = LeadThrough(yumi)
+    simulate(DigitalTwin(yumi, operator=hand), controller, 1.5)
+    result = controller.calibration
+    assert not result.accepted and "touched" in result.reason and "\n" not in result.reason
+    assert result.payload == 0.0 and np.all(result.friction_scale == 1.0)
+    assert controller.state is SupervisorState.TEACHING
+    assert any(e.kind == "calibration" for e in controller.supervisor.events)
+
+
+def test_calibration_motion_is_small_and_returns(yumi):
+    """Each joint moves about one stroke and comes back to within a stroke of where it was."""
+    controller, _, sim = calibrated(yumi, TwinConfig(model_error=MASSES_OFF, seed=3))
+    stroke = CalibrationParameters().stroke
+    excursion = np.max(np.abs(sim.q_true - sim.q_true[0]), axis=0)
+    assert np.all(excursion < 2.5 * stroke)
+    assert np.all(excursion > 0.5 * stroke)  # every joint really moved
+    assert np.max(np.abs(sim.q_true[-1] - sim.q_true[0])) < stroke
+
+
+def test_without_calibration_guiding_starts_at_once(yumi, tmp_path):
+    """``calibration = false`` in TOML (or None): no calibration motion."""
+    path = tmp_path / "lead_through.toml"
+    path.write_text("calibration = false\n[dither]\nfrequency = 12.0\n", encoding="utf-8")
+    parameters = LeadThroughParameters.from_toml(path)
+    controller = LeadThrough(yumi, parameters=parameters)
+    assert parameters.calibration is None and not controller.calibrating
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("stroke", 0.0), ("speed", -1.0), ("cycles", 0), ("cycles", 1.5), ("max_payload", 0.0)],
+)
+def test_bad_calibration_parameters_are_one_line_errors(field, value):
+    """Each bad setting names itself."""
+    with pytest.raises(lt.errors.ParameterError, match=field):
+        CalibrationParameters(**{field: value})
+
+
+def test_with_payload_matches_the_twin_carrying_it(yumi):
+    """A payload lumped into the last link: gravity as MuJoCo computes it for the twin."""
+    import mujoco
+
+    payload = Payload(0.5, (0.0, 0.0, 0.05))
+    twin = DigitalTwin(yumi, TwinConfig(model_error=ModelError(payload=payload)))
+    model = lt.Dynamics(yumi.with_payload(payload.mass, payload.com))
+    for q in np.random.default_rng(0).uniform(yumi.q_min, yumi.q_max, (3, yumi.n_joints)):
+        twin.data.qpos[:], twin.data.qvel[:] = q, 0.0
+        mujoco.mj_forward(twin.model, twin.data)
+        np.testing.assert_allclose(model.gravity(q), twin.data.qfrc_bias, atol=1e-9)
+    assert yumi.with_payload(0.0) is yumi
