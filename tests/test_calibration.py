@@ -52,7 +52,7 @@ def test_gravity_error_and_friction_levels_match_the_truth(yumi, identified_fric
 def test_unknown_payload_is_found_and_held(yumi):
     """An unmodelled 0.5 kg payload: weighed at start-up, the arm left alone stays put."""
     config = TwinConfig(model_error=dataclasses.replace(MASSES_OFF, payload=Payload(0.5)), seed=1)
-    controller, twin, sim = calibrated(yumi, config, seconds=6.0)
+    controller, _twin, sim = calibrated(yumi, config, seconds=6.0)
     assert controller.calibration.payload == pytest.approx(0.5, rel=0.1)
     settled = sim.t > 1.5
     assert np.max(np.abs(sim.q_true[settled] - sim.q_true[settled][0])) < 1e-3
@@ -85,7 +85,7 @@ def test_touching_the_arm_during_calibration_refuses_it_and_never_faults(yumi):
 
 def test_calibration_motion_is_small_and_returns(yumi):
     """Each joint moves about one stroke and comes back to within a stroke of where it was."""
-    controller, _, sim = calibrated(yumi, TwinConfig(model_error=MASSES_OFF, seed=3))
+    _controller, _, sim = calibrated(yumi, TwinConfig(model_error=MASSES_OFF, seed=3))
     stroke = CalibrationParameters().stroke
     excursion = np.max(np.abs(sim.q_true - sim.q_true[0]), axis=0)
     assert np.all(excursion < 2.5 * stroke)
