@@ -85,6 +85,7 @@ class LeadThrough:
         """The model-based parts, for the model of ``robot`` (and a payload) and ``friction``."""
         p = self.parameters
         self.dynamics = Dynamics(robot)
+        self.supervisor.dynamics = self.dynamics  # one model, computed once per period
         self.friction = friction
         self.feed_forward = PassiveFeedForward(self.dynamics, friction, self.dt, p.compensation,
                                                p.dither, p.measurement_delay)  # fmt: skip

@@ -12,17 +12,22 @@ limits, and latches a FAULT on non-finite, frozen or out-of-range sensor data or
 non-finite command: then the safe stop (gravity hold with damping, then gravity hold
 alone, no feedback) until ``reset()``. No exception escapes ``check`` or ``command``.
 Messages number the joints from 1 at the base.
+
+Cost: the bounds are computed once, in the constructor; a good sample is validated with
+one vectorised comparison per call, and the reasons, events and per-joint loops only run
+when something is wrong (a fault, a wall, a joint or the tool too fast).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from enum import StrEnum
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from leadthrough.description import FloatArray
+from leadthrough.description import FloatArray, RobotDescription
 from leadthrough.dynamics import Dynamics
 from leadthrough.errors import ParameterError
 from leadthrough.validation import real
@@ -100,6 +105,68 @@ class SafetyParameters:
             raise ParameterError("stale_periods", f"must be an integer ≥ 2 or 0, got {stale!r}")
 
 
+@dataclass(frozen=True, eq=False)
+class _Limits:
+    """The supervisor's bounds, computed once from the robot and the settings.
+
+    Attributes:
+        torque: Torque limits [Nm], shape (n,); ``-torque`` is ``torque_low``.
+        torque_low: Lower torque limits [Nm], shape (n,).
+        q_low: Position readings below this are faults [rad], shape (n,).
+        q_high: Position readings above this are faults [rad], shape (n,).
+        qd_bound: Velocity readings beyond ± this are faults [rad/s], shape (n,).
+        tau_bound: Torque readings beyond ± this are faults [Nm], shape (n,).
+        speed: Joint speed limits, braked above [rad/s], shape (n,).
+        wall_low: The lower soft walls start below this [rad], shape (n,).
+        wall_high: The upper soft walls start above this [rad], shape (n,).
+        stiffness: Wall stiffness [Nm/rad], shape (n,).
+        sample_low: Lower bounds of (q, q̇, τ_measured) concatenated, shape (3n,).
+        sample_high: Upper bounds of (q, q̇, τ_measured) concatenated, shape (3n,).
+        command_low: Lower bounds of (q, q̇, τ_desired); τ_desired need only be finite.
+        command_high: Upper bounds of (q, q̇, τ_desired), shape (3n,).
+    """
+
+    torque: FloatArray
+    torque_low: FloatArray
+    q_low: FloatArray
+    q_high: FloatArray
+    qd_bound: FloatArray
+    tau_bound: FloatArray
+    speed: FloatArray
+    wall_low: FloatArray
+    wall_high: FloatArray
+    stiffness: FloatArray
+    sample_low: FloatArray
+    sample_high: FloatArray
+    command_low: FloatArray
+    command_high: FloatArray
+
+    @classmethod
+    def of(cls, robot: RobotDescription, p: SafetyParameters) -> _Limits:
+        """The bounds for ``robot`` with the settings ``p``."""
+        margin = p.position_reading_margin
+        q_low, q_high = robot.q_min - margin, robot.q_max + margin
+        qd_bound = p.velocity_reading_margin * robot.velocity_limits
+        tau_bound = p.torque_reading_margin * robot.torque_limits
+        finite = np.full(robot.n_joints, np.finfo(float).max)  # only ±inf and NaN are beyond
+        return cls(
+            torque=robot.torque_limits,
+            torque_low=-robot.torque_limits,
+            q_low=q_low,
+            q_high=q_high,
+            qd_bound=qd_bound,
+            tau_bound=tau_bound,
+            speed=p.joint_speed_fraction * robot.velocity_limits,
+            wall_low=robot.q_min + p.soft_limit_margin,
+            wall_high=robot.q_max - p.soft_limit_margin,
+            stiffness=p.wall_torque_fraction * robot.torque_limits / p.soft_limit_margin,
+            sample_low=np.concatenate((q_low, -qd_bound, -tau_bound)),
+            sample_high=np.concatenate((q_high, qd_bound, tau_bound)),
+            command_low=np.concatenate((q_low, -qd_bound, -finite)),
+            command_high=np.concatenate((q_high, qd_bound, finite)),
+        )
+
+
 class SafetySupervisor:
     """Limits, braking, walls, sensor checks and the safe stop, for one arm.
 
@@ -113,7 +180,7 @@ class SafetySupervisor:
     Args:
         dynamics: Model of the arm (limits, M(q), G(q), flange Jacobian).
         dt: Control period [s].
-        parameters: Safety settings.
+        parameters: Safety settings (read once, here, with the robot's limits).
     """
 
     def __init__(
@@ -124,6 +191,7 @@ class SafetySupervisor:
         self.n = dynamics.n
         self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
         self.parameters = parameters or SafetyParameters()
+        self._limits = _Limits.of(self.robot, self.parameters)
         self.state = SupervisorState.HOLDING
         self.fault_reason: str | None = None
         self.events: list[SafetyEvent] = []
@@ -217,34 +285,52 @@ class SafetySupervisor:
     def _supervised(
         self, q: FloatArray, qd: FloatArray, tau_desired: FloatArray
     ) -> FloatArray | None:
-        problem = self._sample_problem(q, qd, None) or _command_problem(tau_desired, self.n)
-        if problem is not None:
-            self._fault(problem)
+        """The supervised torque [Nm], or None after latching a fault (bad input or torque)."""
+        if self._input_problem(q, qd, tau_desired) is not None:
             return None
         self._q_last_good = q
         mass = self.dynamics.mass(q)
-        inertia = np.diag(mass)
-        limit = self.robot.torque_limits
-        tau = np.clip(tau_desired, -limit, limit)  # a huge command cannot swamp the safety
+        inertia = mass.diagonal()
+        tau = self._saturated(tau_desired)  # a huge command cannot swamp the safety
         braking = self._joint_braking(qd, inertia)
         if self.state is SupervisorState.TEACHING:
             braking = braking + self._tool_braking(q, qd, mass)
-        # while braking, the brakes win: the controller's torque on a braked joint is
-        # replaced by gravity compensation, so no controller can push through the limit
-        tau = np.where(braking != 0.0, self.dynamics.gravity(q), tau)
+        braked = braking != 0.0
+        if braked.any():
+            # while braking, the brakes win: the controller's torque on a braked joint is
+            # replaced by gravity compensation, so no controller can push through the limit
+            tau = np.where(braked, self.dynamics.gravity(q), tau)
         tau += self._walls(q, qd, inertia) + braking
-        if not np.all(np.isfinite(tau)):
+        if not np.isfinite(tau).all():
             self._fault("non-finite safety torque")
             return None
-        return np.clip(tau, -limit, limit)
+        return self._saturated(tau)
+
+    def _saturated(self, tau: FloatArray) -> FloatArray:
+        """``tau`` [Nm] clipped to ± the torque limits, as a new array.
+
+        Same result as ``np.clip`` for a finite ``tau`` (the only kind passed here), at
+        a third of its cost.
+        """
+        return np.minimum(np.maximum(tau, self._limits.torque_low), self._limits.torque)
 
     def _walls(self, q: FloatArray, qd: FloatArray, inertia: FloatArray) -> FloatArray:
-        """Spring-damper walls inside the position limits [Nm], pushing away from them."""
-        p, robot = self.parameters, self.robot
-        stiffness = p.wall_torque_fraction * robot.torque_limits / p.soft_limit_margin
-        damping = inertia / p.wall_damping_time
-        below = np.maximum(robot.q_min + p.soft_limit_margin - q, 0.0)
-        above = np.maximum(q - (robot.q_max - p.soft_limit_margin), 0.0)
+        """Spring-damper walls inside the position limits [Nm], pushing away from them.
+
+        Args:
+            q: Joint positions [rad], finite, shape (n,).
+            qd: Joint velocities [rad/s], shape (n,).
+            inertia: Diagonal of M(q) [kg m²], shape (n,).
+        """
+        limits, robot = self._limits, self.robot
+        # q is finite, so this is exactly where `below > 0` or `above > 0` below
+        if not ((q < limits.wall_low) | (q > limits.wall_high)).any():
+            self._active.pop("soft_limit", None)  # the episode, if any, is over
+            return np.zeros(self.n)
+        stiffness = limits.stiffness
+        damping = inertia / self.parameters.wall_damping_time
+        below = np.maximum(limits.wall_low - q, 0.0)
+        above = np.maximum(q - limits.wall_high, 0.0)
         push_up = np.where(below > 0.0, stiffness * below + damping * np.maximum(-qd, 0.0), 0.0)
         push_down = np.where(above > 0.0, stiffness * above + damping * np.maximum(qd, 0.0), 0.0)
         for i in self._started("soft_limit", (below > 0.0) | (above > 0.0)):
@@ -254,10 +340,20 @@ class SafetySupervisor:
         return push_up - push_down
 
     def _joint_braking(self, qd: FloatArray, inertia: FloatArray) -> FloatArray:
-        """Torque [Nm] braking each joint faster than its speed limit, zero below."""
-        limit = self.parameters.joint_speed_fraction * self.robot.velocity_limits
-        excess = np.maximum(np.abs(qd) - limit, 0.0)
-        for i in self._started("joint_speed", excess > 0.0):
+        """Torque [Nm] braking each joint faster than its speed limit, zero below.
+
+        Args:
+            qd: Joint velocities [rad/s], finite, shape (n,).
+            inertia: Diagonal of M(q) [kg m²], shape (n,).
+        """
+        limit = self._limits.speed
+        speed = np.abs(qd)
+        fast = speed > limit  # q̇ is finite, so this is exactly `excess > 0`
+        if not fast.any():
+            self._active.pop("joint_speed", None)  # the episode, if any, is over
+            return np.zeros(self.n)
+        excess = np.maximum(speed - limit, 0.0)
+        for i in self._started("joint_speed", fast):
             detail = f"joint {i + 1} speed {abs(qd[i]):.4g} rad/s above {limit[i]:.4g} rad/s"
             self._log("joint_speed", f"{detail}: braking")
         return -inertia * excess / self.parameters.braking_time * np.sign(qd)
@@ -265,9 +361,10 @@ class SafetySupervisor:
     def _tool_braking(self, q: FloatArray, qd: FloatArray, mass: FloatArray) -> FloatArray:
         """Torque [Nm] braking the flange when faster than the teaching limit, else zero."""
         limit = self.parameters.tool_speed_limit
-        speed = float(np.linalg.norm(self.dynamics.jacobian(q)[:3] @ qd))
+        velocity = self.dynamics.jacobian(q)[:3] @ qd
+        speed = math.sqrt(velocity.dot(velocity))  # what np.linalg.norm computes
         self.max_tool_speed = max(self.max_tool_speed, speed)
-        if self._started("tool_speed", np.array([speed > limit])).size:
+        if self._began("tool_speed", speed > limit):
             self._log("tool_speed", f"tool speed {speed:.3g} m/s above {limit:.3g} m/s: braking")
         if speed <= limit:
             return np.zeros(self.n)
@@ -282,10 +379,9 @@ class SafetySupervisor:
             q = self._q_last_good
             tau = self.dynamics.gravity(q)
             if self._t - self._fault_time < p.safe_stop_damping_time:
-                damping = np.diag(self.dynamics.mass(q)) / p.braking_time
+                damping = self.dynamics.mass(q).diagonal() / p.braking_time
                 tau = tau - damping * self._trusted_velocity(qd)
-            tau = np.where(np.isfinite(tau), tau, 0.0)
-            return np.clip(tau, -self.robot.torque_limits, self.robot.torque_limits)
+            return self._saturated(np.where(np.isfinite(tau), tau, 0.0))
         except Exception:  # the last resort must return a torque
             return np.zeros(self.n)
 
@@ -297,40 +393,94 @@ class SafetySupervisor:
             return np.zeros(self.n)
         if qd.shape != (self.n,):
             return np.zeros(self.n)
-        bound = self.parameters.velocity_reading_margin * self.robot.velocity_limits
-        trusted = np.isfinite(qd) & (np.abs(qd) <= bound) & ~self._frozen
+        bound = self._limits.qd_bound
+        trusted = np.isfinite(qd) & (np.abs(qd) <= bound) & ~self._frozen()
         return np.where(trusted, qd, 0.0)
 
     def _sample_problem(self, q: FloatArray, qd: FloatArray, tau: FloatArray | None) -> str | None:
-        """Why a sample is invalid (shape, non-finite, out of range), or None."""
-        p, robot = self.parameters, self.robot
-        speed = p.velocity_reading_margin * robot.velocity_limits
-        torque = p.torque_reading_margin * robot.torque_limits
-        margin = p.position_reading_margin
+        """Why a sample is invalid (shape, non-finite, out of range), or None.
+
+        The reason is only spelled out for a bad sample, and not while a fault is
+        latched (``_fault`` would drop it): then it is a placeholder.
+        """
+        limits = self._limits
+        readings = (q, qd) if tau is None else (q, qd, tau)
+        if self._in_range(readings, limits.sample_low, limits.sample_high):
+            return None
+        if self.state is SupervisorState.FAULT:
+            return _UNEXPLAINED
+        return self._sample_reason(q, qd, tau)
+
+    def _input_problem(self, q: FloatArray, qd: FloatArray, tau_desired: FloatArray) -> str | None:
+        """Why (q [rad], q̇ [rad/s], τ_desired [Nm]) cannot be supervised, latched as a fault."""
+        limits = self._limits
+        if self._in_range((q, qd, tau_desired), limits.command_low, limits.command_high):
+            return None
+        problem = self._sample_reason(q, qd, None) or _command_problem(tau_desired, self.n)
+        if problem is not None:
+            self._fault(problem)
+        return problem
+
+    def _sample_reason(self, q: FloatArray, qd: FloatArray, tau: FloatArray | None) -> str | None:
+        """The first problem of a sample, reading by reading and joint by joint, or None."""
+        limits = self._limits
+        speed, torque = limits.qd_bound, limits.tau_bound
         return (
-            _reading_problem("position", q, robot.q_min - margin, robot.q_max + margin, "rad")
+            _reading_problem("position", q, limits.q_low, limits.q_high, "rad")
             or _reading_problem("velocity", qd, -speed, speed, "rad/s")
             or (None if tau is None else _reading_problem("torque", tau, -torque, torque, "Nm"))
         )
 
+    def _in_range(
+        self, readings: tuple[FloatArray, ...], low: FloatArray, high: FloatArray
+    ) -> bool:
+        """Whether every reading has shape (n,) and lies within [low, high] (NaN does not).
+
+        Args:
+            readings: Vectors in their units, each expected of shape (n,).
+            low: Their lower bounds, concatenated in the same order, shape (k n,) with k at
+                least the number of readings.
+            high: Their upper bounds, likewise.
+        """
+        shape = (self.n,)
+        for reading in readings:
+            if reading.shape != shape:
+                return False
+        values = np.concatenate(readings)
+        size = values.size
+        return bool(((values >= low[:size]) & (values <= high[:size])).all())
+
     def _stale_problem(self, q: FloatArray, qd: FloatArray) -> str | None:
         """Count bit-identical (q, q̇) samples per joint; a frozen encoder's reason, or None."""
-        periods = self.parameters.stale_periods
-        bits = np.stack([q, qd]).view(np.uint64)
+        n = self.n
+        bits = np.concatenate((q, qd)).view(np.uint64)
         if self._previous_bits is None:
-            self._runs = np.ones(self.n, dtype=int)
+            self._runs = np.ones(n, dtype=int)
         else:
-            same = np.all(bits == self._previous_bits, axis=0)
-            self._runs = np.where(same, self._runs + 1, 1)
+            same = bits == self._previous_bits
+            self._runs = self._runs * (same[:n] & same[n:]) + 1  # a changed joint restarts at 1
         self._previous_bits = bits
-        if periods == 0:
+        frozen = self._frozen()
+        if not frozen.any():
             return None
-        self._frozen = self._runs >= periods
-        frozen = np.flatnonzero(self._frozen)
-        if frozen.size == 0:
-            return None
-        i = frozen[0]
+        i = np.flatnonzero(frozen)[0]
         return f"joint {i + 1} encoder frozen: q and qd identical for {self._runs[i]} samples"
+
+    def _frozen(self) -> NDArray[np.bool_]:
+        """Joints whose encoder is frozen: ``stale_periods`` identical samples (0: none)."""
+        periods = self.parameters.stale_periods
+        if periods == 0:
+            return np.zeros(self.n, dtype=bool)
+        return self._runs >= periods
+
+    def _began(self, key: str, active: bool) -> bool:
+        """Whether the one-flag episode ``key`` became active this period."""
+        if not active:
+            self._active.pop(key, None)
+            return False
+        started = key not in self._active
+        self._active[key] = _ACTIVE
+        return started
 
     def _started(self, key: str, active: NDArray[np.bool_]) -> NDArray[np.intp]:
         """Indices where ``key`` became active this period (for one event per episode)."""
@@ -365,8 +515,15 @@ class SafetySupervisor:
     def _clear_episodes(self) -> None:
         self._previous_bits: NDArray[np.uint64] | None = None
         self._runs = np.zeros(self.n, dtype=int)
-        self._frozen = np.zeros(self.n, dtype=bool)
         self._active: dict[str, NDArray[np.bool_]] = {}
+
+
+#: Placeholder reason while a fault is latched: ``_fault`` keeps the first reason only.
+_UNEXPLAINED = "invalid sample"
+
+#: The stored state of an active one-flag episode (see ``_began``).
+_ACTIVE = np.ones(1, dtype=bool)
+_ACTIVE.setflags(write=False)
 
 
 def _floats(value: object) -> FloatArray:
