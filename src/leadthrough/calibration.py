@@ -24,7 +24,7 @@ import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from leadthrough.description import FloatArray, RobotDescription
 from leadthrough.dynamics import Dynamics
@@ -33,6 +33,8 @@ from leadthrough.friction_model import FrictionModel
 from leadthrough.tracking import JointTracker
 from leadthrough.trajectories import triangular_velocity
 from leadthrough.validation import real
+
+BoolArray = NDArray[np.bool_]
 
 #: A joint faster than this fraction of the calibration speed slides [–].
 _SLIDING = 0.25
@@ -96,6 +98,8 @@ class Calibration:
         friction_scale: True over modelled Coulomb level, per joint [–].
         accepted: Whether the result is plausible (nobody touched the arm).
         reason: Why it was refused ("" if accepted).
+        measured: Joints that slid both ways; the others (a joint held by stiction) keep
+            the model as it was (no error, scale 1) and do not enter the payload fit.
     """
 
     pose: FloatArray
@@ -106,6 +110,7 @@ class Calibration:
     friction_scale: FloatArray
     accepted: bool
     reason: str = ""
+    measured: BoolArray | None = None
 
     def robot(self, nominal: RobotDescription) -> RobotDescription:
         """The description with the measured payload."""
@@ -193,10 +198,11 @@ class CalibrationRun:
         plus, minus = np.array(self._plus), np.array(self._minus)
         slid = np.sum(np.isfinite(plus), axis=0) >= _ENOUGH
         slid &= np.sum(np.isfinite(minus), axis=0) >= _ENOUGH
-        if not np.all(slid):
+        if np.count_nonzero(slid) < 0.5 * slid.size:
             joints = ", ".join(str(j + 1) for j in np.flatnonzero(~slid))
             return self._refused(f"joint(s) {joints} did not slide both ways")
-        e_plus, e_minus = np.nanmedian(plus, axis=0), np.nanmedian(minus, axis=0)
+        e_plus = np.nanmedian(np.where(slid, plus, 0.0), axis=0)
+        e_minus = np.nanmedian(np.where(slid, minus, 0.0), axis=0)  # a stuck joint: no error
         gravity_error, coulomb_error = 0.5 * (e_plus + e_minus), 0.5 * (e_plus - e_minus)
         level = self.friction.coulomb_level(self.pose)
         scale = 1.0 - coulomb_error / np.maximum(level, 1e-9)
@@ -205,13 +211,15 @@ class CalibrationRun:
             joint = int(np.argmax(np.abs(scale - 1.0)))
             return self._refused(f"joint {joint + 1}'s friction seems {scale[joint]:.2f}× the "
                                  "model's: was the arm touched?")  # fmt: skip
-        per_kilogram = self.payload_regressor(self.pose)
+        per_kilogram = np.where(slid, self.payload_regressor(self.pose), 0.0)  # measured joints
         payload = max(float(-per_kilogram @ gravity_error / (per_kilogram @ per_kilogram)), 0.0)
+        per_kilogram = self.payload_regressor(self.pose)
         if payload > p.max_payload:
             return self._refused(f"a payload of {payload:.2f} kg is more than the "
                                  f"{p.max_payload:g} kg allowed: was the arm touched?")  # fmt: skip
-        bias = gravity_error + payload * per_kilogram
-        return Calibration(self.pose, gravity_error, coulomb_error, payload, bias, scale, True)
+        bias = np.where(slid, gravity_error + payload * per_kilogram, 0.0)
+        return Calibration(self.pose, gravity_error, coulomb_error, payload, bias, scale, True,
+                           measured=slid)  # fmt: skip
 
     def payload_regressor(self, q: FloatArray) -> FloatArray:
         """Gravity torque of one kilogram at the flange, ``Y = −J_vᵀ g`` [Nm/kg]."""
@@ -221,4 +229,4 @@ class CalibrationRun:
         n = self.pose.shape[0]
         zeros = np.zeros(n)
         return Calibration(self.pose, zeros, zeros, 0.0, zeros, np.ones(n), False,
-                           f"calibration refused: {reason}")  # fmt: skip
+                           f"calibration refused: {reason}", np.zeros(n, dtype=bool))  # fmt: skip

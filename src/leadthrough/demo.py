@@ -98,6 +98,7 @@ def run_demo(out: Path, robot: RobotDescription, config: TwinConfig = REALISTIC_
     clock = time.perf_counter()
     say(f"3/4 replaying the recorded path ({path.name}) …")
     recording = read_recording(path)
+    taught = taught.after(recording.t[0], restart_clock=False)  # from the end of the calibration
     replay_config = replace(teach_config, seed=config.seed + 1)
     replayed, errors, _ = replay_recording(robot, recording.t, recording.q, friction, replay_config)
     seconds["replay"] = time.perf_counter() - clock

@@ -8,10 +8,13 @@ from pathlib import Path
 from leadthrough.description import RobotDescription
 from leadthrough.friction_study import run_friction_study
 from leadthrough.lead_through_experiments import (
+    calibration_checks,
     damping_runs,
     effort_comparison,
     end_stop,
     passive_feed_forward,
+    plants_table,
+    robustness,
 )
 from leadthrough.lead_through_parameters import LeadThroughParameters
 from leadthrough.observer_experiments import (
@@ -93,6 +96,12 @@ def write_experiments(
     figure("fig6_7.png", lead_through_plots.plot_effort(comparison),
            "Fig. 6.7: operator effort, the same hand on the same paths")  # fmt: skip
     sections.append(comparison.table() + "\n")
+    say("start-up calibration and other plants …")
+    sections.append("## Start-up calibration, and the defaults on other plants\n")
+    checks = calibration_checks(robot, friction)
+    figure("calibration.png", lead_through_plots.plot_calibration(checks),
+           "the start-up calibration against each plant's truth")  # fmt: skip
+    sections.append(plants_table(checks, robustness(robot, friction)) + "\n")
     report = out / "experiments.md"
     report.write_text("# leadthrough: the thesis' experiments on the twin\n\n"
                       + "\n".join(sections), encoding="utf-8")  # fmt: skip

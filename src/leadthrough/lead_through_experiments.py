@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from leadthrough.calibration import CalibrationParameters
+from leadthrough.calibration import Calibration, CalibrationParameters
 from leadthrough.description import FloatArray, RobotDescription
 from leadthrough.dynamics import Dynamics
 from leadthrough.feedforward import GravityCompensation
@@ -22,7 +22,9 @@ from leadthrough.friction_model import FrictionModel
 from leadthrough.lead_through import LeadThrough
 from leadthrough.lead_through_parameters import LeadThroughParameters
 from leadthrough.observer_experiments import REALISTIC_TWIN
-from leadthrough.twin.operator import JointHand, Operator
+from leadthrough.twin.mjcf import Payload
+from leadthrough.twin.model_error import ModelError
+from leadthrough.twin.operator import During, JointHand, Operator
 from leadthrough.twin.paths import JointMinimumJerk
 from leadthrough.twin.runner import SimulationResult, simulate
 from leadthrough.twin.scenarios import scenario
@@ -164,28 +166,6 @@ def effort_comparison(
     return EffortComparison(runs)
 
 
-class _Window(Operator):
-    """An operator that grabs the arm at ``start`` and lets go at ``stop`` [s].
-
-    Its own clock starts at the grab.
-    """
-
-    def __init__(self, operator: Operator, start: float, stop: float = np.inf) -> None:
-        self.operator, self.start, self.stop = operator, start, stop
-
-    def wrench(self, t: float, flange_pose: FloatArray, flange_velocity: FloatArray) -> FloatArray:
-        """The operator's wrench inside the window, zero outside."""
-        if not self.start <= t < self.stop:
-            return np.zeros(6)
-        return self.operator.wrench(t - self.start, flange_pose, flange_velocity)
-
-    def joint_torque(self, t: float, q: FloatArray, qd: FloatArray) -> FloatArray:
-        """The operator's joint torque inside the window, zero outside."""
-        if not self.start <= t < self.stop:
-            return np.zeros(len(q))
-        return self.operator.joint_torque(t - self.start, q, qd)
-
-
 def _guided(
     robot: RobotDescription,
     config: TwinConfig,
@@ -200,7 +180,7 @@ def _guided(
     The operator grabs at :data:`GRAB_TIME` and lets go ``release`` [s] later; the
     signals are returned from the grab on, with t = 0 at the grab.
     """
-    twin = DigitalTwin(robot, config, _Window(operator, GRAB_TIME, GRAB_TIME + release), q0)
+    twin = DigitalTwin(robot, config, During(operator, GRAB_TIME, GRAB_TIME + release), q0)
     whole = simulate(twin, controller, GRAB_TIME + duration)
     sim = whole.after(GRAB_TIME)
     if isinstance(controller, Recorder):
@@ -339,3 +319,84 @@ def stability_session(
     operator = (operator_factory or teaching_session_operator)(robot)
     twin = DigitalTwin(robot, table_config, operator)
     return simulate(twin, _controller(robot, "active", friction, parameters), duration)
+
+
+#: Plants the defaults are judged on (SPEC: masses ±5 %, friction ±20 %, an unknown payload).
+PLANTS: dict[str, TwinConfig] = {
+    "realistic (masses ±5 %, seed 1)": REALISTIC_TWIN,
+    "every mass +5 %": replace(REALISTIC_TWIN, model_error=ModelError(mass_scale=1.05)),
+    "every mass −5 %": replace(REALISTIC_TWIN, model_error=ModelError(mass_scale=0.95)),
+    "friction −20 %": replace(REALISTIC_TWIN, seed=7, model_error=replace(
+        REALISTIC_TWIN.model_error, friction_scale=0.8)),
+    "friction +20 %": replace(REALISTIC_TWIN, seed=3, model_error=replace(
+        REALISTIC_TWIN.model_error, friction_scale=1.2)),
+    "0.5 kg payload": replace(REALISTIC_TWIN, model_error=replace(
+        REALISTIC_TWIN.model_error, payload=Payload(0.5))),
+}  # fmt: skip
+
+
+@dataclass(frozen=True, eq=False)
+class CalibrationCheck:
+    """The start-up calibration on one plant, against the plant's truth.
+
+    Attributes:
+        plant: Plant name.
+        calibration: What the calibration measured.
+        true_gravity_error: ``G_model − G_true`` at the pose, payload included [Nm].
+        true_friction_scale: True over modelled Coulomb level at the pose [–].
+        true_payload: Payload the plant carries [kg].
+    """
+
+    plant: str
+    calibration: Calibration
+    true_gravity_error: FloatArray
+    true_friction_scale: FloatArray
+    true_payload: float
+
+
+def calibration_checks(
+    robot: RobotDescription, friction: FrictionModel | None = None
+) -> list[CalibrationCheck]:
+    """Calibrate on every plant of :data:`PLANTS`, nobody touching; keep the truth alongside."""
+    checks = []
+    for name, config in PLANTS.items():
+        twin = DigitalTwin(robot, config)
+        controller = LeadThrough(robot, friction=friction)
+        simulate(twin, controller, GRAB_TIME + 0.1)
+        result = controller.calibration
+        true_gravity = Dynamics(twin.true_robot).gravity(result.pose)
+        payload = config.model_error.payload
+        if payload is not None:
+            true_gravity = Dynamics(
+                twin.true_robot.with_payload(payload.mass, payload.com)
+            ).gravity(result.pose)
+        modelled = controller.nominal_friction.coulomb_level(result.pose)
+        true_scale = twin.friction.params.coulomb_level(result.pose) / modelled
+        checks.append(CalibrationCheck(name, result, Dynamics(robot).gravity(result.pose)
+                                       - true_gravity, true_scale,
+                                       0.0 if payload is None else payload.mass))  # fmt: skip
+    return checks
+
+
+def robustness(
+    robot: RobotDescription, friction: FrictionModel | None = None
+) -> dict[str, ReleaseResult]:
+    """Release and stay with the defaults on every plant of :data:`PLANTS`."""
+    return {name: release_and_stay(robot, friction, config) for name, config in PLANTS.items()}
+
+
+def plants_table(checks: list[CalibrationCheck], releases: dict[str, ReleaseResult]) -> str:
+    """Markdown table: calibration errors and release-and-stay on every plant."""
+    lines = ["| plant | payload measured / true [kg] | Coulomb level error, max [%] "
+             "| gravity error, measured − true, max [Nm] | released: stopped after [s] "
+             "| then drift [mrad] |",
+             "|---|---:|---:|---:|---:|---:|"]  # fmt: skip
+    for check in checks:
+        result, release = check.calibration, releases[check.plant]
+        scale = 100.0 * np.max(np.abs(result.friction_scale - check.true_friction_scale)
+                               * result.measured)  # fmt: skip
+        gravity = np.max(np.abs(result.gravity_error - check.true_gravity_error) * result.measured)
+        lines.append(f"| {check.plant} | {result.payload:.2f} / {check.true_payload:.2f} | "
+                     f"{scale:.1f} | {gravity:.3f} | {release.stop_time:.2f} | "
+                     f"{1e3 * release.drift:.2f} |")  # fmt: skip
+    return "\n".join(lines)

@@ -14,13 +14,17 @@ from leadthrough.lead_through import LeadThrough
 from leadthrough.observer_experiments import REALISTIC_TWIN
 from leadthrough.recording import SessionRecorder, read_recording
 from leadthrough.replay import Replayer, plan_replay, replay_errors
+from leadthrough.twin.operator import During
 from leadthrough.twin.runner import SimulationResult, simulate
 from leadthrough.twin.scenarios import scenario
 from leadthrough.twin.simulator import DigitalTwin
 
 
 class RecordingController:
-    """Runs a LeadThrough and records every period and its supervisor's events."""
+    """Runs a LeadThrough and records every period taught, and the supervisor's events.
+
+    The start-up calibration's motion is not part of what was taught: it is not recorded.
+    """
 
     def __init__(self, controller: LeadThrough, recorder: SessionRecorder) -> None:
         self.controller, self.recorder = controller, recorder
@@ -30,8 +34,9 @@ class RecordingController:
         """Control and record one period."""
         command = self.controller.step(q, qd, tau_measured)
         c = self.controller
-        self.recorder.record(self._time, q, qd, tau_measured, c.tau_ext_hat, c.std, c.mode,
-                             c.state.value)  # fmt: skip
+        if not c.calibrating:
+            self.recorder.record(self._time, q, qd, tau_measured, c.tau_ext_hat, c.std, c.mode,
+                                 c.state.value)  # fmt: skip
         for event in c.supervisor.events[self._events :]:
             self.recorder.event(event.t, event.kind, event.detail)
         self._events = len(c.supervisor.events)
@@ -51,12 +56,13 @@ def teach_on_twin(
     """A simulated hand guides the twin along ``path``; record it to ``out``; a summary."""
     friction = FrictionModel.load(friction_file) if friction_file else None
     chosen = scenario(path, robot, replace(REALISTIC_TWIN, seed=seed))
-    twin = chosen.twin(robot)
-    controller = LeadThrough(robot, mode, twin.dt, friction)
+    controller = LeadThrough(robot, mode, chosen.config.control_dt, friction)
+    grab = controller.parameters.calibration.duration if controller.calibrating else 0.0
+    twin = DigitalTwin(robot, chosen.config, During(chosen.operator, grab), chosen.q0)
     out.parent.mkdir(parents=True, exist_ok=True)
     with SessionRecorder(out, robot, {"mode": mode, "path": path, "dt": twin.dt}) as recorder:
         sim = simulate(twin, RecordingController(controller, recorder),
-                       duration or chosen.duration)  # fmt: skip
+                       grab + (duration or chosen.duration))  # fmt: skip
     force = sim.operator_force
     return (f"taught '{path}' in {mode} mode: {len(sim.t)} samples, operator force RMS "
             f"{np.sqrt(np.mean(force**2)):.2f} N (peak {force.max():.1f} N), supervisor "

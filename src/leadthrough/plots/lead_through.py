@@ -11,7 +11,12 @@ from leadthrough.plots import label_torque_and_velocity, pyplot
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from leadthrough.lead_through_experiments import EffortComparison, EndStopResult, GuidedRun
+    from leadthrough.lead_through_experiments import (
+        CalibrationCheck,
+        EffortComparison,
+        EndStopResult,
+        GuidedRun,
+    )
 
 
 def plot_effort(comparison: EffortComparison, path: str = "line") -> Figure:
@@ -94,4 +99,27 @@ def plot_end_stop(results: dict[str, EndStopResult]) -> Figure:
     axes[0].set_ylabel(f"joint {limit.joint + 1} angle [rad]")
     axes[1].set_ylabel("estimated torque [Nm]")
     axes[1].set_xlabel("t [s] (dashed: the hand lets go)")
+    return figure
+
+
+def plot_calibration(checks: list[CalibrationCheck]) -> Figure:
+    """What the start-up calibration measured against the truth, every plant and joint."""
+    plt = pyplot()
+    figure, (left, right) = plt.subplots(1, 2, figsize=(12, 4.8), constrained_layout=True)
+    for check in checks:
+        result = check.calibration
+        label = check.plant
+        if check.true_payload or result.payload > 0.05:
+            label += f" (payload {result.payload:.2f} kg, true {check.true_payload:.2f})"
+        left.plot(check.true_friction_scale, result.friction_scale, "o", label=label)
+        right.plot(check.true_gravity_error, result.gravity_error, "o", label=label)
+    for axis, unit in ((left, "[–]"), (right, "[Nm]")):
+        low, high = axis.get_xlim()
+        axis.plot([low, high], [low, high], "k--", lw=0.8, label="measured = true")
+        axis.set_xlabel(f"true {unit}")
+        axis.set_ylabel(f"measured {unit}")
+        axis.grid(alpha=0.3)
+    left.set_title("Coulomb level over the model's, per joint")
+    right.set_title("gravity error G_model − G_true, per joint")
+    right.legend(fontsize=8)
     return figure

@@ -301,6 +301,28 @@ class TorqueProfile(Operator):
         return tau
 
 
+class During(Operator):
+    """``operator`` acting only from ``start`` until ``stop`` [s], its clock starting at ``start``.
+
+    A person who grabs the arm once the controller is ready and lets go later.
+    """
+
+    def __init__(self, operator: Operator, start: float, stop: float = np.inf) -> None:
+        self.operator, self.start, self.stop = operator, start, stop
+
+    def wrench(self, t: float, flange_pose: FloatArray, flange_velocity: FloatArray) -> FloatArray:
+        """The operator's wrench inside the window, zero outside."""
+        if not self.start <= t < self.stop:
+            return np.zeros(6)
+        return self.operator.wrench(t - self.start, flange_pose, flange_velocity)
+
+    def joint_torque(self, t: float, q: FloatArray, qd: FloatArray) -> FloatArray:
+        """The operator's joint torque inside the window, zero outside."""
+        if not self.start <= t < self.stop:
+            return np.zeros(len(q))
+        return self.operator.joint_torque(t - self.start, q, qd)
+
+
 def _impedance(
     error: FloatArray, rate_error: FloatArray, gains: tuple[float, float], limit: float
 ) -> FloatArray:

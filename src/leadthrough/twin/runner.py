@@ -60,11 +60,12 @@ class SimulationResult:
         """Norm of the hand force [N], (N,)."""
         return np.linalg.norm(self.operator_wrench[:, :3], axis=1)
 
-    def after(self, start: float) -> SimulationResult:
-        """The rows from ``start`` [s] on, with time counted from ``start``."""
+    def after(self, start: float, restart_clock: bool = True) -> SimulationResult:
+        """The rows from ``start`` [s] on, with time counted from ``start`` (or as it was)."""
         keep = self.t >= start - 1e-9
         rows = {field.name: getattr(self, field.name)[keep] for field in fields(self)}
-        rows["t"] = rows["t"] - start
+        if restart_clock:
+            rows["t"] = rows["t"] - start
         return SimulationResult(**rows)
 
     def plot(self, joints: list[int] | None = None) -> Figure:
