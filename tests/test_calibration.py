@@ -53,6 +53,8 @@ def test_unknown_payload_is_found_and_held(yumi):
     config = TwinConfig(model_error=dataclasses.replace(MASSES_OFF, payload=Payload(0.5)), seed=1)
     controller, _twin, sim = calibrated(yumi, config, seconds=6.0)
     assert controller.calibration.payload == pytest.approx(0.5, rel=0.1)
+    logged = [e.detail for e in controller.supervisor.events if e.kind == "calibration"]
+    assert len(logged) == 1 and logged[0].startswith("calibrated: payload 0.5")
     settled = sim.t > 1.5
     assert np.max(np.abs(sim.q_true[settled] - sim.q_true[settled][0])) < 1e-3
     # the same arm without the calibration sags under the payload

@@ -112,6 +112,15 @@ class Calibration:
     reason: str = ""
     measured: BoolArray | None = None
 
+    def summary(self) -> str:
+        """One line: what was measured, or why the calibration was refused."""
+        if not self.accepted:
+            return self.reason
+        scale = self.friction_scale[self.measured]
+        return (f"calibrated: payload {self.payload:.2f} kg, Coulomb levels "
+                f"×{scale.min():.2f}–{scale.max():.2f} of the model, gravity bias up to "
+                f"{np.max(np.abs(self.bias)):.3f} Nm")  # fmt: skip
+
     def robot(self, nominal: RobotDescription) -> RobotDescription:
         """The description with the measured payload."""
         return nominal.with_payload(self.payload) if self.accepted else nominal

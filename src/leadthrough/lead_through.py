@@ -209,10 +209,8 @@ class LeadThrough:
     def _finish_calibration(self, calibration: Calibration) -> None:
         """Use what the calibration measured: payload, friction levels, bias at the pose."""
         self.calibration, self._calibrating = calibration, False
+        self.supervisor.events.append(SafetyEvent(self._time, "calibration", calibration.summary()))
         if not calibration.accepted:
-            self.supervisor.events.append(
-                SafetyEvent(self._time, "calibration", calibration.reason)
-            )
             return
         robot = calibration.robot(self.robot)
         self._build(robot, calibration.friction(self.nominal_friction))

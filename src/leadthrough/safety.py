@@ -47,7 +47,7 @@ class SafetyEvent:
 
     Attributes:
         t: Time of the control period it happened in [s].
-        kind: ``"fault"``, ``"tool_speed"``, ``"joint_speed"``, ``"soft_limit"``,
+        kind: ``"fault"``, ``"tool_speed"``, ``"joint_speed"``, ``"soft_limit"``, ``"calibration"``,
             ``"overrun"``, ``"reset"`` or ``"mode"``.
         detail: One line saying what happened, with the joint and the value.
     """
