@@ -220,9 +220,9 @@ class CalibrationRun:
             joint = int(np.argmax(np.abs(scale - 1.0)))
             return self._refused(f"joint {joint + 1}'s friction seems {scale[joint]:.2f}× the "
                                  "model's: was the arm touched?")  # fmt: skip
-        per_kilogram = np.where(slid, self.payload_regressor(self.pose), 0.0)  # measured joints
-        payload = max(float(-per_kilogram @ gravity_error / (per_kilogram @ per_kilogram)), 0.0)
         per_kilogram = self.payload_regressor(self.pose)
+        fitted = np.where(slid, per_kilogram, 0.0)  # only the joints that were measured
+        payload = max(float(-fitted @ gravity_error / (fitted @ fitted)), 0.0)
         if payload > p.max_payload:
             return self._refused(f"a payload of {payload:.2f} kg is more than the "
                                  f"{p.max_payload:g} kg allowed: was the arm touched?")  # fmt: skip

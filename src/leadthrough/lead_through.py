@@ -138,6 +138,12 @@ class LeadThrough:
         """Whether the start-up calibration is running (nobody may touch the arm)."""
         return self._calibrating
 
+    @property
+    def calibration_time(self) -> float:
+        """How long the start-up calibration lasts [s] (0 without one)."""
+        calibration = self.parameters.calibration
+        return 0.0 if calibration is None else calibration.duration
+
     def reset(self) -> None:
         """Start afresh: nominal model, filters, references, bias and calibration.
 
@@ -159,6 +165,7 @@ class LeadThrough:
         self.last_feed_forward = None
         self.calibration: Calibration | None = None
         self._calibration_run: CalibrationRun | None = None
+        self._calibration_start = 0.0  # [s], set when the first sample arrives
         self._calibrating = p.calibration is not None  # the supervisor stays in TEACHING
 
     # --- the control step --------------------------------------------------------------
@@ -203,7 +210,8 @@ class LeadThrough:
         command = run.command(t, q, qd)
         if t >= run.duration or run.disturbance is not None:
             self._finish_calibration(run.result())
-            return self._control(q, qd, tau_measured) if run.disturbance else command
+            if run.disturbance:  # let the arm go at once: hold it against gravity only
+                return self.dynamics.gravity(q)
         return command
 
     def _finish_calibration(self, calibration: Calibration) -> None:

@@ -364,12 +364,10 @@ def calibration_checks(
         controller = LeadThrough(robot, friction=friction)
         simulate(twin, controller, GRAB_TIME + 0.1)
         result = controller.calibration
-        true_gravity = Dynamics(twin.true_robot).gravity(result.pose)
         payload = config.model_error.payload
-        if payload is not None:
-            true_gravity = Dynamics(
-                twin.true_robot.with_payload(payload.mass, payload.com)
-            ).gravity(result.pose)
+        carried = (twin.true_robot if payload is None
+                   else twin.true_robot.with_payload(payload.mass, payload.com))  # fmt: skip
+        true_gravity = Dynamics(carried).gravity(result.pose)
         modelled = controller.nominal_friction.coulomb_level(result.pose)
         true_scale = twin.friction.params.coulomb_level(result.pose) / modelled
         checks.append(CalibrationCheck(name, result, Dynamics(robot).gravity(result.pose)

@@ -57,7 +57,7 @@ def teach_on_twin(
     friction = FrictionModel.load(friction_file) if friction_file else None
     chosen = scenario(path, robot, replace(REALISTIC_TWIN, seed=seed))
     controller = LeadThrough(robot, mode, chosen.config.control_dt, friction)
-    grab = controller.parameters.calibration.duration if controller.calibrating else 0.0
+    grab = controller.calibration_time  # the hand grabs the arm once it is ready
     twin = DigitalTwin(robot, chosen.config, During(chosen.operator, grab), chosen.q0)
     out.parent.mkdir(parents=True, exist_ok=True)
     with SessionRecorder(out, robot, {"mode": mode, "path": path, "dt": twin.dt}) as recorder:
