@@ -9,6 +9,7 @@ Example:
 """
 
 from leadthrough import robots
+from leadthrough.control_loop import LoopReport, control_loop
 from leadthrough.description import (
     DHParameters,
     Joint,
@@ -46,6 +47,7 @@ __all__ = [
     "LeadThroughParameters",
     "LeadthroughError",
     "LinkInertial",
+    "LoopReport",
     "MomentumObserver",
     "ObserverParameters",
     "ParameterError",
@@ -53,6 +55,7 @@ __all__ = [
     "RobotDescription",
     "RobotDescriptionError",
     "__version__",
+    "control_loop",
     "identify_friction",
     "robots",
 ]

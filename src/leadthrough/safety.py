@@ -211,6 +211,13 @@ class SafetySupervisor:
         """Switch to HOLDING; ignored while in FAULT."""
         self._set_mode(SupervisorState.HOLDING)
 
+    def stop(self, reason: str) -> None:
+        """Latch FAULT with ``reason`` from outside (Ctrl-C, a robot error): the safe stop.
+
+        From the next :meth:`command` on, the arm gets the safe stop until :meth:`reset`.
+        """
+        self._fault(reason)
+
     def reset(self) -> None:
         """Clear a latched fault and go to HOLDING; frozen-encoder counters restart."""
         self.state = SupervisorState.HOLDING

@@ -1,0 +1,124 @@
+"""The control loop on a robot (SPEC §7): periods, deadlines, Ctrl-C and robot errors."""
+
+import time
+
+import numpy as np
+import pytest
+
+import leadthrough as lt
+from leadthrough.errors import ParameterError
+from leadthrough.lead_through_parameters import LeadThroughParameters
+from leadthrough.safety import SupervisorState
+from leadthrough.twin.operator import During, Hand
+from leadthrough.twin.paths import Line
+from leadthrough.twin.simulator import DigitalTwin
+
+ROBOT = lt.robots.yumi()
+
+
+class ClosableTwin(DigitalTwin):
+    """The twin, remembering whether it was closed and failing on request."""
+
+    def __init__(self, *args, fail_at: float = np.inf, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.closed, self.fail_at = False, fail_at
+
+    def send_torque(self, tau) -> None:
+        """Fail like a lost connection once the twin's clock reaches ``fail_at``."""
+        if self.time >= self.fail_at:
+            raise ConnectionError("robot connection lost")
+        super().send_torque(tau)
+
+    def close(self) -> None:
+        """Record the close."""
+        self.closed = True
+
+
+class Slow:
+    """A controller that takes ``delay`` [s] longer than it should every other period."""
+
+    def __init__(self, controller: lt.LeadThrough, delay: float) -> None:
+        self.controller, self.supervisor, self.delay = controller, controller.supervisor, delay
+        self.calls = 0
+
+    def step(self, q, qd, tau_measured):
+        """Step the controller, late every other time."""
+        self.calls += 1
+        if self.calls % 2 == 0:
+            time.sleep(self.delay)
+        return self.controller.step(q, qd, tau_measured)
+
+
+def controller() -> lt.LeadThrough:
+    """Passive lead-through, no calibration (the tests start guiding at once)."""
+    return lt.LeadThrough(ROBOT, "passive", parameters=LeadThroughParameters(calibration=None))
+
+
+def pulling_hand(stop: float) -> During:
+    """A hand pulling the tool 20 cm sideways in 1 s, letting go at ``stop`` [s]."""
+    start = lt.Dynamics(ROBOT).pose(ROBOT.home())[:3, 3]
+    return During(Hand(Line(start, start + np.array([0.0, 0.2, 0.0]), duration=1.0)), 0.0, stop)
+
+
+def test_loop_runs_the_periods_and_reports_the_compute_time():
+    """0.2 s at 250 Hz is 50 periods, each command sent; the report agrees with the supervisor."""
+    twin, ctl, sent = ClosableTwin(ROBOT), controller(), []
+    report = lt.control_loop(twin, ctl, duration=0.2, after_period=lambda s, c: sent.append(c))
+    assert report.periods == len(sent) == 50
+    assert twin.time == pytest.approx(0.2)
+    assert report.ended == "finished" and not twin.closed
+    assert report.overruns == ctl.supervisor.overruns
+    assert 0.0 < report.compute_median <= report.compute_max
+    assert "50 periods of 4 ms" in report.summary()
+
+
+def test_until_ends_the_loop_before_stepping():
+    """The loop ends at the first sample ``until`` accepts."""
+    report = lt.control_loop(ClosableTwin(ROBOT), controller(), until=lambda s: s.t >= 0.1 - 1e-9)
+    assert report.ended == "stopped"
+    assert report.periods == 25
+
+
+def test_missed_deadlines_are_counted_and_logged():
+    """A step that takes longer than the period is an overrun, each one counted."""
+    slow = Slow(controller(), delay=0.006)  # 6 ms > 4 ms
+    report = lt.control_loop(ClosableTwin(ROBOT), slow, duration=0.08)  # 20 periods
+    assert report.overruns == slow.supervisor.overruns >= 10
+    assert report.compute_max > 0.004
+    assert any(event.kind == "overrun" for event in slow.supervisor.events)
+
+
+def test_ctrl_c_brings_the_moving_arm_to_the_safe_stop_and_closes_the_robot():
+    """Ctrl-C while a hand drags the arm: fault with the reason, the arm stopped and held."""
+    twin, ctl = ClosableTwin(ROBOT, operator=pulling_hand(stop=0.4)), controller()
+
+    def interrupt(state, command) -> None:
+        if state.t >= 0.4 - 1e-9:
+            moving.append(np.max(np.abs(state.qd)))
+            raise KeyboardInterrupt
+
+    moving = []
+
+    report = lt.control_loop(twin, ctl, after_period=interrupt, stop_time=0.5)
+    assert "Ctrl-C" in report.ended and report.periods == 101
+    assert ctl.state is SupervisorState.FAULT and "Ctrl-C" in ctl.supervisor.fault_reason
+    assert twin.closed
+    assert moving[0] > 0.1  # [rad/s]
+    assert np.max(np.abs(twin.truth.qd)) < 0.01  # stopped within the 0.5 s of the safe stop
+
+
+def test_a_robot_error_is_raised_after_the_safe_stop():
+    """A lost connection: the fault names it, the robot is closed, the error reaches the caller."""
+    twin, ctl = ClosableTwin(ROBOT, fail_at=0.1), controller()
+    with pytest.raises(ConnectionError, match="connection lost"):
+        lt.control_loop(twin, ctl, duration=1.0)
+    assert ctl.state is SupervisorState.FAULT
+    assert "ConnectionError: robot connection lost" in ctl.supervisor.fault_reason
+    assert twin.closed
+
+
+@pytest.mark.parametrize(("name", "value"), [("duration", -1.0), ("stop_time", float("nan"))])
+def test_bad_loop_settings_are_refused(name, value):
+    """A negative duration or a NaN stop time names the setting."""
+    with pytest.raises(ParameterError, match=name):
+        lt.control_loop(ClosableTwin(ROBOT), controller(), **{name: value})
