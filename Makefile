@@ -29,6 +29,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_twin.py
 	$(BIN)/python benchmarks/bench_observer.py
 	$(BIN)/python benchmarks/bench_step.py
+	$(BIN)/python benchmarks/effort_limits.py
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

@@ -35,12 +35,12 @@ def friction(identified_friction):
 
 
 @pytest.mark.parametrize(
-    ("path", "ratio"), [("line", 0.5), ("circle", 0.6), ("point_to_point", 0.5)]
+    ("path", "ratio"), [("line", 0.45), ("circle", 0.55), ("point_to_point", 0.45)]
 )
 def test_active_is_lighter_than_passive_and_passive_than_none(yumi, friction, path, ratio):
     """The same hand on the same path: RMS force active < passive < gravity compensation only.
 
-    Measured 0.39, 0.52 and 0.32 of passive (README); the circle misses the issue's ½.
+    Measured 0.32, 0.47 and 0.32 of passive (README); over seeds the circle spans 0.48–0.52.
     """
     runs = {mode: guided_run(yumi, path, mode, friction) for mode in ("none", "passive", "active")}
     assert runs["active"].rms_force < ratio * runs["passive"].rms_force

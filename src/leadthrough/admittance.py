@@ -77,6 +77,20 @@ def dead_zone(value: FloatArray, width: FloatArray, offset: FloatArray | float =
     return np.where(value > upper, value - upper, np.where(value < lower, value - lower, 0.0))
 
 
+def operator_started(drive: FloatArray, qd: FloatArray, rest_velocity: float) -> FloatArray:
+    """What of the operator torque ``drive`` [Nm] the admittance may act on.
+
+    A joint moving the way its torque pushes is assisted; one moving against it is not
+    (the operator brakes it, or the reading is model error); a joint at rest (|q̇| ≤
+    ``rest_velocity`` [rad/s], where the observer is nearly blind) only while another
+    joint moves with the operator: a push that has not broken its stiction yet. With
+    nothing moving nothing is assisted, so model error read at rest cannot start a motion.
+    """
+    moving = np.abs(qd) > rest_velocity
+    started = moving & (np.sign(qd) * drive > 0.0)
+    return np.where(started | (~moving & started.any()), drive, 0.0)
+
+
 def keep_within(state: AdmittanceState, low: FloatArray, high: FloatArray) -> AdmittanceState:
     """Clamp the position reference into [low, high]; stop its velocity at the bound."""
     clamped = np.clip(state.q_ref, low, high)

@@ -29,6 +29,7 @@ from leadthrough.admittance import (
     admittance_step,
     dead_zone,
     keep_within,
+    operator_started,
     tracking_torque,
 )
 from leadthrough.bias import ModelErrorBias
@@ -247,12 +248,8 @@ class LeadThrough:
                                 learn=clear_of_limits)  # fmt: skip
         width = self._friction_tolerance + self.model_error.tolerance(gravity)
         drive = dead_zone(estimate, width, self.model_error.bias)
-        # assist motions the operator has started: a joint at rest (where the observer is
-        # blind and its reading is mostly model error) or moving against the estimate gets none
         if p.require_motion:
-            started = np.sign(qd) * drive > 0.0
-            started &= np.abs(qd) > p.compensation.dead_band
-            drive = np.where(started, drive, 0.0)
+            drive = operator_started(drive, qd, p.compensation.dead_band)
         self._drive = drive
 
     def _admittance(self, q: FloatArray, qd: FloatArray, drive: FloatArray) -> FloatArray:

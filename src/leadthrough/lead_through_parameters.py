@@ -76,8 +76,9 @@ class LeadThroughParameters:
             supervisor stays the last word).
         release_time: No operator torque on any joint for this long means the operator let
             go: the arm is braked to a stop [s].
-        require_motion: Assist only joints already moving the way the estimate pushes
-            (at rest the observer is blind and reads model error, end-stops and contacts).
+        require_motion: Assist only joints moving the way the estimate pushes and, while
+            one does, joints at rest (at rest the observer is nearly blind and reads model
+            error, end-stops and contacts: with nothing moving, nothing is assisted).
         measurement_delay: Control steps from sending a command to measuring it [–].
     """
 
