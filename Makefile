@@ -30,6 +30,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_observer.py
 	$(BIN)/python benchmarks/bench_step.py
 	$(BIN)/python benchmarks/effort_limits.py
+	$(BIN)/python benchmarks/effort_plants.py
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

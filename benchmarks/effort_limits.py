@@ -16,14 +16,12 @@ import numpy as np
 import leadthrough as lt
 from leadthrough.admittance import dead_zone
 from leadthrough.friction_study import run_friction_study
-from leadthrough.lead_through_experiments import GRAB_TIME, guided_run
+from leadthrough.lead_through_experiments import GRAB_TIME, PATHS, guided_run
 from leadthrough.observer_experiments import REALISTIC_TWIN
 from leadthrough.twin.operator import During
 from leadthrough.twin.runner import simulate
 from leadthrough.twin.scenarios import scenario
 from leadthrough.twin.simulator import DigitalTwin
-
-PATHS = ("line", "circle", "point_to_point")
 
 
 class TruthDriven(lt.LeadThrough):
