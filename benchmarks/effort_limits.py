@@ -16,11 +16,8 @@ import numpy as np
 import leadthrough as lt
 from leadthrough.admittance import dead_zone
 from leadthrough.friction_study import run_friction_study
-from leadthrough.lead_through_experiments import GRAB_TIME, PATHS, guided_run
+from leadthrough.lead_through_experiments import PATHS, guided_run
 from leadthrough.observer_experiments import REALISTIC_TWIN
-from leadthrough.twin.operator import During
-from leadthrough.twin.runner import simulate
-from leadthrough.twin.scenarios import scenario
 from leadthrough.twin.simulator import DigitalTwin
 
 
@@ -54,12 +51,11 @@ class TruthDriven(lt.LeadThrough):
 
 def rms_force(robot, friction, path: str, rule: str) -> float:
     """RMS hand force [N] over the path's duration, the truth-driven controller on the twin."""
-    chosen = scenario(path, robot, REALISTIC_TWIN)
-    twin = DigitalTwin(robot, chosen.config, During(chosen.operator, GRAB_TIME), chosen.q0)
-    controller = TruthDriven(robot, friction, twin, rule)
-    sim = simulate(twin, controller, GRAB_TIME + chosen.duration).after(GRAB_TIME)
-    on_path = sim.t <= chosen.operator.path.duration
-    return float(np.sqrt(np.mean(sim.operator_force[on_path] ** 2)))
+
+    def truth_driven(twin: DigitalTwin) -> TruthDriven:
+        return TruthDriven(robot, friction, twin, rule)
+
+    return guided_run(robot, path, "active", friction, controller_for=truth_driven).rms_force
 
 
 def main() -> None:

@@ -104,6 +104,7 @@ def control_loop(
         real("duration", duration, minimum=0.0, error=ParameterError)
     periods = None if duration is None else round(duration / robot.dt)
     supervisor = controller.supervisor
+    overruns_before = supervisor.overruns
     compute = array("d")
     ended, k = "finished", 0
     try:
@@ -128,7 +129,7 @@ def control_loop(
         if not isinstance(error, KeyboardInterrupt):
             raise
     times = np.frombuffer(compute, dtype=float) if compute else np.zeros(1)
-    return LoopReport(k, int(np.sum(times > robot.dt)), float(np.median(times)),
+    return LoopReport(k, supervisor.overruns - overruns_before, float(np.median(times)),
                       float(times.max()), robot.dt, ended)  # fmt: skip
 
 

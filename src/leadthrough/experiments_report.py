@@ -49,26 +49,14 @@ def write_experiments(
     sections.append(f"## Friction\nIdentified in {study.seconds:.1f} s; largest error against "
                     f"the twin: τ_C {100 * abs(coulomb).max():.2f} %, c "
                     f"{100 * abs(viscous).max():.2f} %.\n")  # fmt: skip
-    figure(
-        "fig4_2.png",
-        friction_plots.plot_raw_and_compensated(study, 0),
-        "Fig. 4.2: raw and compensated friction data, joint 1",
-    )
-    figure(
-        "fig4_3.png",
-        friction_plots.plot_sigmoid_fit(study, 0),
-        "Fig. 4.3: fitted sigmoids, joint 1",
-    )
-    figure(
-        "fig4_5.png",
-        friction_plots.plot_gaussian_model(study, 0),
-        "Fig. 4.5: Gaussian friction model, joint 1",
-    )
-    figure(
-        "fig4_6.png",
-        friction_plots.plot_position_dependence(study, 3),
-        "Fig. 4.6: position dependence, joint 4",
-    )
+    for name, plot, joint, caption in (
+        ("fig4_2.png", friction_plots.plot_raw_and_compensated, 0, "Fig. 4.2: raw and "
+                                                                   "compensated friction data"),
+        ("fig4_3.png", friction_plots.plot_sigmoid_fit, 0, "Fig. 4.3: fitted sigmoids"),
+        ("fig4_5.png", friction_plots.plot_gaussian_model, 0, "Fig. 4.5: Gaussian friction model"),
+        ("fig4_6.png", friction_plots.plot_position_dependence, 3, "Fig. 4.6: position dependence"),
+    ):  # fmt: skip
+        figure(name, plot(study, joint), f"{caption}, joint {joint + 1}")
     say("passive lead-through (Fig. 4.8) …")
     sections.append("## Passive lead-through\n")
     passive = passive_feed_forward(robot, friction)

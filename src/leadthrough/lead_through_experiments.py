@@ -19,6 +19,7 @@ from leadthrough.description import FloatArray, RobotDescription
 from leadthrough.dynamics import Dynamics
 from leadthrough.feedforward import GravityCompensation
 from leadthrough.friction_model import FrictionModel
+from leadthrough.interface import Controller
 from leadthrough.lead_through import LeadThrough
 from leadthrough.lead_through_parameters import LeadThroughParameters
 from leadthrough.observer_experiments import REALISTIC_TWIN
@@ -111,11 +112,20 @@ def guided_run(
     friction: FrictionModel | None = None,
     config: TwinConfig = REALISTIC_TWIN,
     parameters: LeadThroughParameters | None = None,
+    controller_for: Callable[[DigitalTwin], Controller] | None = None,
 ) -> GuidedRun:
-    """One path with one controller on the twin."""
+    """One path with one controller on the twin.
+
+    ``controller_for(twin)`` builds another controller than ``mode``'s (for analysis, e.g.
+    one that reads the twin's truth); ``mode`` then only labels the run.
+    """
     chosen = scenario(path, robot, config)
-    controller = _controller(robot, mode, friction, parameters)
-    sim = _guided(robot, chosen.config, chosen.operator, chosen.q0, controller, chosen.duration)
+    twin = _grabbing_twin(robot, chosen.config, chosen.operator, chosen.q0)
+    if controller_for is None:
+        controller = _controller(robot, mode, friction, parameters)
+    else:
+        controller = controller_for(twin)
+    sim = _after_grab(twin, controller, chosen.duration)
     reference = chosen.operator.path
     targets = np.array([reference.position(t) for t in sim.t])
     distance = np.linalg.norm(sim.flange_position - targets, axis=1)
@@ -171,7 +181,7 @@ def _guided(
     config: TwinConfig,
     operator: Operator,
     q0: FloatArray,
-    controller: object,
+    controller: Controller,
     duration: float,
     release: float = np.inf,
 ) -> SimulationResult:
@@ -180,7 +190,22 @@ def _guided(
     The operator grabs at :data:`GRAB_TIME` and lets go ``release`` [s] later; the
     signals are returned from the grab on, with t = 0 at the grab.
     """
-    twin = DigitalTwin(robot, config, During(operator, GRAB_TIME, GRAB_TIME + release), q0)
+    return _after_grab(_grabbing_twin(robot, config, operator, q0, release), controller, duration)
+
+
+def _grabbing_twin(
+    robot: RobotDescription,
+    config: TwinConfig,
+    operator: Operator,
+    q0: FloatArray,
+    release: float = np.inf,
+) -> DigitalTwin:
+    """The twin at ``q0``; ``operator`` grabs at :data:`GRAB_TIME`, lets go ``release`` later."""
+    return DigitalTwin(robot, config, During(operator, GRAB_TIME, GRAB_TIME + release), q0)
+
+
+def _after_grab(twin: DigitalTwin, controller: Controller, duration: float) -> SimulationResult:
+    """Run until ``duration`` [s] after the grab; the signals from the grab on (t = 0 there)."""
     whole = simulate(twin, controller, GRAB_TIME + duration)
     sim = whole.after(GRAB_TIME)
     if isinstance(controller, Recorder):
