@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 import leadthrough as lt
-from leadthrough.observer_baseline import ClassicalMomentumObserver
+from leadthrough.estimation.classical import ClassicalMomentumObserver
 from timing import parser, report, time_per_call
 
 

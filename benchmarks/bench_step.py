@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 import leadthrough as lt
-from leadthrough.safety import SupervisorState
+from leadthrough.safety.supervisor import SupervisorState
 from timing import parser, report, time_per_call
 
 

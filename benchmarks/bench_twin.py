@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 
 import leadthrough as lt
-from leadthrough.feedforward import GravityCompensation
+from leadthrough.control.feedforward import GravityCompensation
 from leadthrough.twin.runner import simulate
 from leadthrough.twin.scenarios import scenario
 

@@ -14,10 +14,10 @@ from __future__ import annotations
 import numpy as np
 
 import leadthrough as lt
-from leadthrough.admittance import dead_zone
-from leadthrough.friction_study import run_friction_study
-from leadthrough.lead_through_experiments import PATHS, guided_run
-from leadthrough.observer_experiments import REALISTIC_TWIN
+from leadthrough.control.admittance import dead_zone
+from leadthrough.experiments.friction_study import run_friction_study
+from leadthrough.experiments.lead_through import PATHS, guided_run
+from leadthrough.experiments.observer import REALISTIC_TWIN
 from leadthrough.twin.simulator import DigitalTwin
 
 

@@ -14,9 +14,9 @@ from __future__ import annotations
 from dataclasses import replace
 
 import leadthrough as lt
-from leadthrough.friction_study import run_friction_study
-from leadthrough.lead_through_experiments import PATHS, PLANTS, guided_run
-from leadthrough.observer_experiments import REALISTIC_TWIN
+from leadthrough.experiments.friction_study import run_friction_study
+from leadthrough.experiments.lead_through import PATHS, PLANTS, guided_run
+from leadthrough.experiments.observer import REALISTIC_TWIN
 
 
 def main() -> None:

@@ -20,8 +20,8 @@ def robots_dir() -> Path:
 def identified_friction():
     """Friction identified on the realistic twin (masses ±5 %), as a user does first."""
     import leadthrough as lt
-    from leadthrough.friction_study import run_friction_study
-    from leadthrough.observer_experiments import REALISTIC_TWIN
+    from leadthrough.experiments.friction_study import run_friction_study
+    from leadthrough.experiments.observer import REALISTIC_TWIN
 
     return run_friction_study(lt.robots.yumi(), twin_config=REALISTIC_TWIN).model
 
@@ -29,6 +29,6 @@ def identified_friction():
 @pytest.fixture(scope="session")
 def realistic_friction(identified_friction):
     """The identified friction without its position dependence (cable effect unmodelled)."""
-    from leadthrough.observer_experiments import identified_without_position
+    from leadthrough.experiments.observer import identified_without_position
 
     return identified_without_position(identified_friction)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from leadthrough.admittance import (
+from leadthrough.control.admittance import (
     AdmittanceState,
     admittance_step,
     dead_zone,

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from leadthrough.calibration import CalibrationParameters
-from leadthrough.lead_through import LeadThrough
-from leadthrough.lead_through_parameters import LeadThroughParameters
-from leadthrough.safety import SupervisorState
+from leadthrough.control.calibration import CalibrationParameters
+from leadthrough.control.lead_through import LeadThrough
+from leadthrough.control.parameters import LeadThroughParameters
+from leadthrough.safety.supervisor import SupervisorState
 from leadthrough.twin.mjcf import Payload
 from leadthrough.twin.model_error import ModelError
 from leadthrough.twin.operator import Hand
@@ -121,7 +121,7 @@ def test_with_payload_matches_the_twin_carrying_it(yumi):
 
 def test_every_plant_calibrates_and_its_released_arm_stays(yumi, identified_friction):
     """The defaults on every plant of PLANTS: calibration close to the truth, arm stays put."""
-    from leadthrough.lead_through_experiments import calibration_checks, plants_table, robustness
+    from leadthrough.experiments.lead_through import calibration_checks, plants_table, robustness
 
     checks = calibration_checks(yumi, identified_friction)
     releases = robustness(yumi, identified_friction)

@@ -5,7 +5,7 @@ import sys
 
 import pytest
 
-from leadthrough.cli import main
+from leadthrough.cli.main import main
 
 
 def test_info_summarises_the_yumi(capsys):

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from leadthrough.constraints import Box, KeepOutSphere, Plane, constraint_torque
+from leadthrough.control.constraints import Box, KeepOutSphere, Plane, constraint_torque
 
 
 def test_plane_pulls_back_from_both_sides():

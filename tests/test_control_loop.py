@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
+from leadthrough.control.parameters import LeadThroughParameters
 from leadthrough.errors import ParameterError
-from leadthrough.lead_through_parameters import LeadThroughParameters
-from leadthrough.safety import SupervisorState
+from leadthrough.safety.supervisor import SupervisorState
 from leadthrough.twin.operator import During, Hand
 from leadthrough.twin.paths import Line
 from leadthrough.twin.simulator import DigitalTwin

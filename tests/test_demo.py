@@ -2,7 +2,7 @@
 
 import re
 
-from leadthrough.cli import main
+from leadthrough.cli.main import main
 
 
 def test_demo_writes_a_report_with_figures_and_replays_accurately(tmp_path, capsys):

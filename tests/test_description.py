@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from leadthrough.description import rpy_to_rotation
+from leadthrough.model.description import rpy_to_rotation
 from rotations import rot_x, rot_y, rot_z
 
 

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from leadthrough.dither import Dither, DitherParameters
+from leadthrough.control.dither import Dither, DitherParameters
 from leadthrough.errors import ParameterError
-from leadthrough.friction_model import FrictionModel
+from leadthrough.friction.model import FrictionModel
 
 N = 7
 DT = 0.004

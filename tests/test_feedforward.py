@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from leadthrough.dither import Dither, DitherParameters
-from leadthrough.feedforward import GravityCompensation, PassiveFeedForward
-from leadthrough.friction_compensation import CoulombCompensation, CoulombCompensationParameters
-from leadthrough.friction_model import FrictionModel
+from leadthrough.control.dither import Dither, DitherParameters
+from leadthrough.control.feedforward import GravityCompensation, PassiveFeedForward
+from leadthrough.friction.compensation import CoulombCompensation, CoulombCompensationParameters
+from leadthrough.friction.model import FrictionModel
 
 N = 7
 DT = 0.004

@@ -7,12 +7,12 @@ import pytest
 
 import leadthrough as lt
 from leadthrough.errors import ParameterError
-from leadthrough.friction_compensation import (
+from leadthrough.friction.compensation import (
     CoulombCompensation,
     CoulombCompensationParameters,
     coulomb_compensation,
 )
-from leadthrough.friction_model import FrictionModel
+from leadthrough.friction.model import FrictionModel
 
 N = 7
 FRACTION = 0.7  # ε of the thesis

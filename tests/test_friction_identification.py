@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from leadthrough.excitation import ExcitationRun, friction_experiment
-from leadthrough.friction_identification import IdentificationError, identify_friction
-from leadthrough.friction_logs import LogFileError, load_logs, save_logs
-from leadthrough.friction_study import run_friction_study
+from leadthrough.experiments.friction_study import run_friction_study
+from leadthrough.friction.identification import IdentificationError, identify_friction
+from leadthrough.friction.logs import LogFileError, load_logs, save_logs
+from leadthrough.runtime.excitation import ExcitationRun, friction_experiment
 from leadthrough.trajectories import triangular_velocity
 from leadthrough.twin.friction import randomized_friction
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig

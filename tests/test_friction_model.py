@@ -11,7 +11,7 @@ import tomli_w
 
 import leadthrough as lt
 from leadthrough.errors import ParameterError
-from leadthrough.friction_model import FrictionModel
+from leadthrough.friction.model import FrictionModel
 
 TABLE_4_1_COULOMB = [1.5, 1.4, 0.85, 0.7, 0.25, 0.4, 0.24]
 TABLE_4_1_SLOPE = [5e3] * 7

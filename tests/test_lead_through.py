@@ -4,21 +4,21 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from leadthrough.dither import DitherParameters
-from leadthrough.lead_through import LeadThrough
-from leadthrough.lead_through_experiments import (
+from leadthrough.control.dither import DitherParameters
+from leadthrough.control.lead_through import LeadThrough
+from leadthrough.control.parameters import LeadThroughParameters
+from leadthrough.experiments.lead_through import (
     end_stop,
     guided_run,
     release_and_stay,
     stability_session,
 )
-from leadthrough.lead_through_parameters import LeadThroughParameters
-from leadthrough.safety import SupervisorState
-from leadthrough.session_operator import teaching_session_operator
+from leadthrough.safety.supervisor import SupervisorState
 from leadthrough.twin.model_error import ModelError
 from leadthrough.twin.operator import Hand
 from leadthrough.twin.paths import MinimumJerk
 from leadthrough.twin.runner import simulate
+from leadthrough.twin.session_operator import teaching_session_operator
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig
 
 
@@ -178,7 +178,7 @@ def test_parameters_load_from_toml(tmp_path):
 @pytest.mark.parametrize("kind", ["plane", "box"])
 def test_virtual_constraint_holds_the_tool_against_a_pull(yumi, friction, kind):
     """A hand pulls the tool up and sideways: a plane (or a flat box) keeps it low, not stuck."""
-    from leadthrough.constraints import Box, Plane
+    from leadthrough.control.constraints import Box, Plane
     from leadthrough.twin.paths import Line
 
     start = lt.Dynamics(yumi).pose(yumi.home())[:3, 3]

@@ -14,14 +14,14 @@ from scipy.linalg import expm
 
 import leadthrough as lt
 from leadthrough.errors import ParameterError
-from leadthrough.friction_model import FrictionModel
-from leadthrough.observer import (
+from leadthrough.estimation.classical import ClassicalMomentumObserver
+from leadthrough.estimation.observer import (
     MomentumObserver,
     ObserverParameters,
     process_noise,
     stationary_filter,
 )
-from leadthrough.observer_baseline import ClassicalMomentumObserver
+from leadthrough.friction.model import FrictionModel
 
 N = 7
 DT = 0.004

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from leadthrough.observer_experiments import (
+from leadthrough.experiments.observer import (
     breakaway_with_and_without_dither,
     dither_frequency_sweep,
     single_joint_guiding,

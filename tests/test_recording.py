@@ -13,7 +13,7 @@ import pytest
 
 import leadthrough as lt
 from leadthrough.errors import InputShapeError, RecordingError
-from leadthrough.recording import ARRAYS, SessionEvent, SessionRecorder, read_recording
+from leadthrough.runtime.recording import ARRAYS, SessionEvent, SessionRecorder, read_recording
 
 DT = 0.004  # control period [s], 250 Hz
 
@@ -22,7 +22,7 @@ CHILD = """
 import sys, time
 import numpy as np
 import leadthrough as lt
-from leadthrough.recording import SessionRecorder
+from leadthrough.runtime.recording import SessionRecorder
 
 dt = float(sys.argv[2])
 with SessionRecorder(sys.argv[1], lt.robots.yumi(), {"dt": dt}) as recorder:

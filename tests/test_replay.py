@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from leadthrough.errors import ParameterError, ReplayError
-from leadthrough.replay import (
+from leadthrough.control.replay import (
     Replayer,
     ReplayParameters,
     plan_replay,
     replay_errors,
 )
-from leadthrough.safety import SafetySupervisor, SupervisorState
+from leadthrough.errors import ParameterError, ReplayError
+from leadthrough.safety.supervisor import SafetySupervisor, SupervisorState
 from leadthrough.trajectories import minimum_jerk_phase
 from leadthrough.twin.model_error import ModelError
 from leadthrough.twin.runner import simulate

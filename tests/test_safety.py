@@ -7,7 +7,7 @@ import pytest
 
 import leadthrough as lt
 from leadthrough.errors import ParameterError
-from leadthrough.safety import SafetyParameters, SafetySupervisor, SupervisorState
+from leadthrough.safety.supervisor import SafetyParameters, SafetySupervisor, SupervisorState
 
 DT = 0.004
 ROBOT = lt.robots.yumi()

@@ -3,7 +3,7 @@
 import numpy as np
 
 import leadthrough as lt
-from leadthrough.tracking import JointTracker
+from leadthrough.control.tracking import JointTracker
 
 
 def test_gains_follow_the_inertia_of_the_current_pose():

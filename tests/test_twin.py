@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from leadthrough.feedforward import GravityCompensation
-from leadthrough.interface import MockRobot
+from leadthrough.control.feedforward import GravityCompensation
+from leadthrough.runtime.interface import MockRobot
 from leadthrough.twin.friction import TwinFrictionParameters
 from leadthrough.twin.mjcf import Payload
 from leadthrough.twin.model_error import ModelError

@@ -8,9 +8,19 @@ Example:
     (7,)
 """
 
-from leadthrough import robots
-from leadthrough.control_loop import LoopReport, control_loop
-from leadthrough.description import (
+from leadthrough.control.lead_through import LeadThrough
+from leadthrough.control.parameters import LeadThroughParameters
+from leadthrough.errors import (
+    InputShapeError,
+    LeadthroughError,
+    ParameterError,
+    RobotDescriptionError,
+)
+from leadthrough.estimation.observer import MomentumObserver, ObserverParameters
+from leadthrough.friction.identification import FitReport, identify_friction
+from leadthrough.friction.model import FrictionModel
+from leadthrough.model import robots
+from leadthrough.model.description import (
     DHParameters,
     Joint,
     JointFriction,
@@ -19,18 +29,8 @@ from leadthrough.description import (
     Placement,
     RobotDescription,
 )
-from leadthrough.dynamics import Dynamics
-from leadthrough.errors import (
-    InputShapeError,
-    LeadthroughError,
-    ParameterError,
-    RobotDescriptionError,
-)
-from leadthrough.friction_identification import FitReport, identify_friction
-from leadthrough.friction_model import FrictionModel
-from leadthrough.lead_through import LeadThrough
-from leadthrough.lead_through_parameters import LeadThroughParameters
-from leadthrough.observer import MomentumObserver, ObserverParameters
+from leadthrough.model.dynamics import Dynamics
+from leadthrough.runtime.loop import LoopReport, control_loop
 
 __version__ = "0.1.0"
 

@@ -11,7 +11,7 @@ from leadthrough.plots import pyplot
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from leadthrough.friction_study import FrictionStudy
+    from leadthrough.experiments.friction_study import FrictionStudy
 
 
 def plot_raw_and_compensated(study: FrictionStudy, joint: int) -> Figure:

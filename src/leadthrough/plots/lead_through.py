@@ -11,7 +11,7 @@ from leadthrough.plots import label_torque_and_velocity, pyplot
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from leadthrough.lead_through_experiments import (
+    from leadthrough.experiments.lead_through import (
         CalibrationCheck,
         EffortComparison,
         EndStopResult,

@@ -9,7 +9,7 @@ from leadthrough.plots import label_torque_and_velocity, pyplot
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from leadthrough.observer_experiments import BreakawayResult, DitherSweep, ObserverRun
+    from leadthrough.experiments.observer import BreakawayResult, DitherSweep, ObserverRun
 
 _LABELS = {"kalman_time_varying": "Kalman, time-varying", "kalman_two_level": "Kalman, two-level",
            "classical": "classical observer"}  # fmt: skip

@@ -61,9 +61,9 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from leadthrough.description import RobotDescription
-from leadthrough.dynamics import Dynamics
 from leadthrough.errors import FrictionParameterError, InputShapeError
+from leadthrough.model.description import RobotDescription
+from leadthrough.model.dynamics import Dynamics
 from leadthrough.validation import real
 
 FloatArray = NDArray[np.float64]

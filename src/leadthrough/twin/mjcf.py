@@ -1,7 +1,7 @@
 """Generate the MuJoCo model (MJCF) of the twin from a robot description.
 
 Nothing here is hand-written per robot: bodies, joints and inertials come from the
-description's :class:`~leadthrough.chain.SerialChain`, so that the twin and the
+description's :class:`~leadthrough.model.chain.SerialChain`, so that the twin and the
 controller's Pinocchio model share one source. Body frames are the joint frames;
 each link inertial is moved from its link frame into its body frame. The rotor
 inertia ``G_r² J_m`` becomes the joint armature. Joint friction and damping are zero
@@ -18,8 +18,8 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-from leadthrough.chain import SerialChain, serial_chain
-from leadthrough.description import FloatArray, RobotDescription
+from leadthrough.model.chain import SerialChain, serial_chain
+from leadthrough.model.description import FloatArray, RobotDescription
 
 FLANGE_SITE = "flange"
 TOOL_GEOM = "tool_tip"

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from leadthrough.description import RobotDescription
+from leadthrough.model.description import RobotDescription
 from leadthrough.twin.mjcf import Payload
 from leadthrough.validation import fail, real
 

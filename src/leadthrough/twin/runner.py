@@ -7,9 +7,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from leadthrough.description import FloatArray
-from leadthrough.interface import Controller, JointState
+from leadthrough.model.description import FloatArray
 from leadthrough.progress import Progress
+from leadthrough.runtime.interface import Controller, JointState
 from leadthrough.twin.simulator import DigitalTwin
 
 if TYPE_CHECKING:

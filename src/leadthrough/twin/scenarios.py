@@ -11,9 +11,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from leadthrough.description import RobotDescription
-from leadthrough.dynamics import Dynamics
 from leadthrough.errors import LeadthroughError
+from leadthrough.model.description import RobotDescription
+from leadthrough.model.dynamics import Dynamics
 from leadthrough.twin.mjcf import Payload, TableSurface
 from leadthrough.twin.model_error import ModelError
 from leadthrough.twin.operator import Hand, JointHand, Operator, TorqueProfile, step

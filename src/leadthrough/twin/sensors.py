@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from leadthrough.description import FloatArray, RobotDescription
+from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.validation import real
 
 

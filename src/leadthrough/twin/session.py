@@ -8,9 +8,9 @@ from pathlib import Path
 
 import numpy as np
 
-from leadthrough.description import RobotDescription
-from leadthrough.dynamics import Dynamics
-from leadthrough.feedforward import GravityCompensation
+from leadthrough.control.feedforward import GravityCompensation
+from leadthrough.model.description import RobotDescription
+from leadthrough.model.dynamics import Dynamics
 from leadthrough.twin.render import RenderError, render_arm, save_png
 from leadthrough.twin.runner import simulate
 from leadthrough.twin.scenarios import scenario

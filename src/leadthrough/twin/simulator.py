@@ -21,9 +21,9 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike
 
-from leadthrough.description import FloatArray, RobotDescription
 from leadthrough.errors import InputShapeError, LeadthroughError
-from leadthrough.interface import JointState, RobotInterface
+from leadthrough.model.description import FloatArray, RobotDescription
+from leadthrough.runtime.interface import JointState, RobotInterface
 from leadthrough.twin.friction import (
     LuGreFriction,
     TwinFrictionParameters,

@@ -1,0 +1,112 @@
+"""``leadthrough identify``: friction identification on the twin or from a log file."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from leadthrough.errors import ParameterError
+from leadthrough.experiments.friction_study import FrictionStudy, run_friction_study
+from leadthrough.model.description import RobotDescription
+
+FIGURES = {
+    "fig4_2_raw_vs_filtered": "plot_raw_and_compensated",
+    "fig4_3_sigmoid_fit": "plot_sigmoid_fit",
+    "fig4_5_gaussian_model": "plot_gaussian_model",
+    "fig4_6_position_dependence": "plot_position_dependence",
+}
+
+
+def parse_joints(text: str | None, n: int) -> list[int] | None:
+    """``"1,4"`` → [0, 3] (1-based on the command line); None → all joints."""
+    if text is None:
+        return None
+    try:
+        joints = [int(item) - 1 for item in text.split(",") if item.strip()]
+    except ValueError:
+        raise ParameterError("joints", f"expected numbers like 1,4, got {text!r}") from None
+    bad = [j + 1 for j in joints if not 0 <= j < n]
+    if bad or not joints:
+        raise ParameterError("joints", f"joints are numbered 1 to {n}, got {text!r}")
+    return joints
+
+
+def identify(
+    robot: RobotDescription,
+    out: Path,
+    *,
+    log: Path | None = None,
+    save_log: Path | None = None,
+    joints: Sequence[int] | None = None,
+    seed: int = 0,
+    random_friction: bool = False,
+    progress: bool | None = None,
+) -> str:
+    """Run the study, write parameters, report and figures into ``out``; return a summary."""
+    out.mkdir(parents=True, exist_ok=True)
+    if log is not None:
+        from leadthrough.friction.logs import load_logs
+
+        study = run_friction_study(robot, logs=load_logs(log), joints=joints)
+    else:
+        study = run_friction_study(robot, twin_config=_twin_config(robot, seed, random_friction),
+                                   joints=joints, progress=progress)  # fmt: skip
+    if save_log is not None:
+        from leadthrough.friction.logs import save_logs
+
+        save_logs(study.logs, save_log)
+    study.model.save(out / "friction.toml")
+    summary = summarise(study, out)
+    (out / "identification.txt").write_text(summary + "\n", encoding="utf-8")
+    _figures(study, out)
+    return summary
+
+
+def _twin_config(robot: RobotDescription, seed: int, random_friction: bool) -> object:
+    from leadthrough.twin.friction import randomized_friction
+    from leadthrough.twin.simulator import TwinConfig
+
+    friction = randomized_friction(robot, np.random.default_rng(seed)) if random_friction else None
+    return TwinConfig(seed=seed, friction=friction)
+
+
+def summarise(study: FrictionStudy, out: Path) -> str:
+    """The identified parameters, their fit quality and, on the twin, the errors."""
+    model, joints = study.model, study.report.joints
+    source = (f"twin, {study.simulated_seconds:.0f} s of excitation" if study.truth is not None
+              else "log file")  # fmt: skip
+    lines = [f"friction of {study.robot.name} identified from the {source} "
+             f"in {study.seconds:.1f} s of wall time", "",
+             f"{'joint':>5}{'τ_C [Nm]':>10}{'c [Nm s/rad]':>14}{'A [s/rad]':>11}"
+             f"{'B [rad/s]':>11}{'σ [Nm]':>9}{'k₁':>8}{'k₂':>8}"]  # fmt: skip
+    for j in joints:
+        lines.append(
+            f"{j + 1:>5}{model.coulomb[j]:>10.4f}{model.viscous[j]:>14.4f}{model.slope[j]:>11.0f}"
+            f"{model.half_width[j]:>11.2e}{model.noise_std[j]:>9.4f}"
+            f"{model.position_linear[j]:>8.3f}{model.position_quadratic[j]:>8.3f}"
+        )
+    lines += ["", str(study.report)]
+    errors = study.errors()
+    if errors is not None:
+        coulomb, viscous = errors
+        lines += [
+            "",
+            "against the twin's true sliding friction (mid-range):",
+            "  τ_C error [%]: " + " ".join(f"{100 * coulomb[j]:+.2f}" for j in joints),
+            "  c error [%]:   " + " ".join(f"{100 * viscous[j]:+.2f}" for j in joints),
+        ]
+    lines.append(f"parameters: {out / 'friction.toml'}")
+    return "\n".join(lines)
+
+
+def _figures(study: FrictionStudy, out: Path) -> None:
+    from leadthrough.plots import friction, pyplot
+
+    plt = pyplot()
+    for j in study.report.joints:
+        for name, function in FIGURES.items():
+            figure = getattr(friction, function)(study, j)
+            figure.savefig(out / f"joint{j + 1}_{name}.png", dpi=110)
+            plt.close(figure)

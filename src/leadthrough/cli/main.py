@@ -1,0 +1,246 @@
+"""The ``leadthrough`` command line."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from leadthrough.errors import LeadthroughError
+from leadthrough.model import robots
+
+_EPILOG_INFO = """examples:
+  leadthrough info                       # the shipped ABB YuMi left arm
+  leadthrough info --robot my_arm.toml   # a description file
+  leadthrough info --robot panda.urdf --tip panda_hand
+"""
+
+
+def _add_robot_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--robot",
+        default="yumi",
+        metavar="yumi|FILE",
+        help="shipped robot name or a .toml/.urdf description (default: yumi)",
+    )
+    parser.add_argument("--tip", help="flange link of a URDF (needed when the tree branches)")
+
+
+def _info(args: argparse.Namespace) -> int:
+    from leadthrough.cli.summary import model_summary
+
+    print(model_summary(robots.load(args.robot, tip=args.tip)))
+    return 0
+
+
+_EPILOG_SIMULATE = """examples:
+  leadthrough simulate                          # a hand pulls the YuMi's tool along a line
+  leadthrough simulate --scenario table_push --out results/
+  leadthrough simulate --scenario joint --duration 6 --seed 3
+"""
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    from leadthrough.twin.session import run_scenario
+
+    summary = run_scenario(
+        robots.load(args.robot, tip=args.tip), args.scenario, args.duration, args.seed, args.out
+    )
+    print(summary)
+    return 0
+
+
+_EPILOG_IDENTIFY = """examples:
+  leadthrough identify                         # excite every joint of the YuMi twin, fit, plot
+  leadthrough identify --joints 1,4 --out results/friction
+  leadthrough identify --random-friction --seed 3   # a twin with other friction
+  leadthrough identify --log robot.csv   # a real robot's logs: run,t,q1..,qd1..,tau1..
+"""
+
+
+def _identify(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from leadthrough.cli.identify import identify, parse_joints
+
+    robot = robots.load(args.robot, tip=args.tip)
+    summary = identify(
+        robot,
+        Path(args.out),
+        log=Path(args.log) if args.log else None,
+        save_log=Path(args.save_log) if args.save_log else None,
+        joints=parse_joints(args.joints, robot.n_joints),
+        seed=args.seed,
+        random_friction=args.random_friction,
+    )
+    print(summary)
+    return 0
+
+
+_EPILOG_DEMO = """examples:
+  leadthrough demo                 # identify, teach (recorded), replay, report in out/demo
+  leadthrough demo --out /tmp/demo
+"""
+
+_EPILOG_TEACH = """examples:
+  leadthrough teach                  # a hand teaches a line, recorded to out/taught.mcap
+  leadthrough teach --path circle --mode passive --out circle.mcap
+  leadthrough teach --friction out/friction/friction.toml --duration 8
+"""
+
+_EPILOG_REPLAY = """examples:
+  leadthrough replay out/taught.mcap
+  leadthrough replay out/taught.mcap --time-scale 2 --out out/replay
+"""
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from leadthrough.experiments.demo import run_demo
+    from leadthrough.experiments.demo_report import write_report
+
+    robot = robots.load(args.robot, tip=args.tip)
+    out = Path(args.out)
+    result = run_demo(out, robot)
+    print("4/4 writing the report …")
+    report = write_report(result, robot, out)
+    errors = result.replay_error
+    print(f"replay: joint RMS {1000 * errors['joint_rms']:.2f} mrad, "
+          f"tool RMS {1000 * errors['tool_rms']:.2f} mm")  # fmt: skip
+    print(f"report: {report}")
+    return 0
+
+
+def _teach(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from leadthrough.experiments.teach import teach_on_twin
+
+    robot = robots.load(args.robot, tip=args.tip)
+    print(teach_on_twin(robot, Path(args.out), args.path, args.mode, args.duration,
+                        Path(args.friction) if args.friction else None, args.seed))  # fmt: skip
+    return 0
+
+
+def _replay(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from leadthrough.experiments.teach import replay_on_twin
+
+    print(replay_on_twin(Path(args.recording), Path(args.out), args.time_scale, args.seed))
+    return 0
+
+
+def _experiments(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from leadthrough.experiments.report import write_experiments
+
+    report = write_experiments(robots.load(args.robot, tip=args.tip), Path(args.out))
+    print(f"report: {report}")
+    return 0
+
+
+def _add(commands, name: str, help_text: str, description: str, epilog: str, run):
+    parser = commands.add_parser(name, help=help_text, description=description, epilog=epilog,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
+    parser.set_defaults(run=run)
+    return parser
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every subcommand."""
+    parser = argparse.ArgumentParser(
+        prog="leadthrough",
+        description="Sensorless kinesthetic teaching of robot arms.",
+    )
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    info = commands.add_parser(
+        "info",
+        help="summarise a robot model",
+        description="Joints with limits, masses, gravity torques at home and the condition of M.",
+        epilog=_EPILOG_INFO,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    _add_robot_arguments(info)
+    info.set_defaults(run=_info)
+    simulate = commands.add_parser(
+        "simulate",
+        help="run a twin scenario with gravity feed-forward",
+        description="Run a shipped scenario of the digital twin under gravity feed-forward and"
+        " write a plot of the run and a rendered picture of the arm.",
+        epilog=_EPILOG_SIMULATE,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    _add_robot_arguments(simulate)
+    from leadthrough.twin.scenarios import SCENARIOS
+
+    simulate.add_argument("--scenario", default="line", choices=sorted(SCENARIOS))
+    simulate.add_argument("--duration", type=float, help="simulated seconds (default: scenario's)")
+    simulate.add_argument("--seed", type=int, default=0, help="seed of every random draw")
+    simulate.add_argument("--out", default="out", help="directory for the figures (default: out)")
+    simulate.set_defaults(run=_simulate)
+    identify = commands.add_parser(
+        "identify",
+        help="identify joint friction (twin experiment or log file)",
+        description="Run the friction identification experiment of thesis §4.1.1 on the twin (or"
+        " read logs), fit the Gaussian friction model, write it as TOML with figures 4.2-4.6.",
+        epilog=_EPILOG_IDENTIFY,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    _add_robot_arguments(identify)
+    identify.add_argument("--log", help="read excitation logs (.csv or .npz) instead of the twin")
+    identify.add_argument("--save-log", help="also write the logs (.csv or .npz)")
+    identify.add_argument("--joints", help="joints to identify, 1-based, e.g. 1,4 (default all)")
+    identify.add_argument("--seed", type=int, default=0, help="seed of the twin")
+    identify.add_argument("--random-friction", action="store_true",
+                          help="give the twin randomly drawn friction (seeded)")  # fmt: skip
+    identify.add_argument("--out", default="out/friction", help="output directory")
+    identify.set_defaults(run=_identify)
+    demo = _add(commands, "demo", "the main job: teach, record and replay on the twin",
+                "Identify the twin's friction, let a simulated operator teach the YuMi a path with"
+                " active lead-through (recorded), replay it, and write a report with figures.",
+                _EPILOG_DEMO, _demo)  # fmt: skip
+    _add_robot_arguments(demo)
+    demo.add_argument("--out", default="out/demo", help="report directory (default: out/demo)")
+    teach = _add(commands, "teach", "teach the twin a path with a simulated hand, recorded",
+                 "A simulated operator guides the twin with lead-through; the session is recorded"
+                 " to an MCAP file.", _EPILOG_TEACH, _teach)  # fmt: skip
+    _add_robot_arguments(teach)
+    teach.add_argument("--path", default="line", choices=["line", "circle", "point_to_point"])
+    teach.add_argument("--mode", default="active", choices=["active", "passive"])
+    teach.add_argument("--duration", type=float, help="seconds (default: the path's)")
+    teach.add_argument("--friction", help="identified friction TOML (default: the robot's)")
+    teach.add_argument("--seed", type=int, default=0)
+    teach.add_argument("--out", default="out/taught.mcap", help="recording to write")
+    replay = _add(commands, "replay", "replay a recorded path on the twin",
+                  "Plan (filter, pauses as waypoints, limits checked) and replay a recording on"
+                  " the twin; print the tracking errors and write a figure.",
+                  _EPILOG_REPLAY, _replay)  # fmt: skip
+    replay.add_argument("recording", help="an MCAP recording of a teaching session")
+    replay.add_argument("--time-scale", type=float, default=1.0, help=">1 slower, <1 faster")
+    replay.add_argument("--seed", type=int, default=0)
+    replay.add_argument("--out", default="out/replay", help="figure directory")
+    experiments = _add(commands, "experiments", "every thesis experiment on the twin, one report",
+                       "Reproduce the figures of thesis chapters 4-6 (SPEC §12) on the realistic"
+                       " twin into one Markdown report.",
+                       "examples:\n  leadthrough experiments --out out/experiments\n",
+                       _experiments)  # fmt: skip
+    _add_robot_arguments(experiments)
+    experiments.add_argument("--out", default="out/experiments", help="report directory")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; errors of leadthrough print as one line and exit 2."""
+    args = build_parser().parse_args(argv)
+    try:
+        return args.run(args)
+    except LeadthroughError as error:
+        print(f"leadthrough: error: {error}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,4 @@
+"""Control laws of lead-through.
+
+Orchestration, feed-forward, dither, admittance, calibration, constraints, tracking, replay.
+"""

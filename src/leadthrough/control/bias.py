@@ -1,0 +1,83 @@
+"""What the observer reads while nobody guides the arm is model error: learn it, remove it.
+
+A momentum observer on an imperfect model reads a torque even when nobody touches the
+arm: the weight of a payload, a mass or centre-of-mass error, a friction offset. Fed
+to an admittance, that becomes motion (SPEC §6). This component learns it as a bias
+while the arm rests, and says how much error may remain: before anything is learned,
+the whole uncertainty of the gravity model (``mass_uncertainty · |G(q)|``); once the
+bias is learned at a pose, only the uncertainty of how gravity *changed* since then
+(``mass_uncertainty · |G(q) − G(q_learned)|``). The dead-zone of the controller uses it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from leadthrough.model.description import FloatArray
+
+
+class ModelErrorBias:
+    """A bias learned at rest, with the gravity uncertainty that remains.
+
+    Args:
+        n_joints: Number of joints.
+        learning_time: Time constant of the learning [s].
+        mass_uncertainty: Relative error of the gravity model [–].
+        rest_velocity: All joints slower than this means the arm rests [rad/s].
+    """
+
+    def __init__(
+        self, n_joints: int, learning_time: float, mass_uncertainty: float, rest_velocity: float
+    ) -> None:
+        self.learning_time = learning_time
+        self.mass_uncertainty = mass_uncertainty
+        self.rest_velocity = rest_velocity
+        self.bias = np.zeros(n_joints)
+        self.confidence = 0.0  # 0: nothing learned, → 1 after a few learning times at rest
+        self._gravity_learned = np.zeros(n_joints)
+
+    def update(
+        self,
+        estimate: FloatArray,
+        qd: FloatArray,
+        gravity: FloatArray,
+        dt: float,
+        bound: FloatArray,
+        learn: bool = True,
+    ) -> FloatArray:
+        """Learn while the arm rests; return the estimate minus the bias [Nm].
+
+        Args:
+            estimate: Observer estimate [Nm].
+            qd: Joint velocities [rad/s].
+            gravity: G(q) [Nm].
+            dt: Period [s].
+            bound: Largest plausible model error per joint [Nm]: the bias never exceeds it,
+                so a push against an end-stop or an operator holding the arm still is not
+                learned as model error.
+            learn: Whether learning is allowed now (e.g. not at an end-stop).
+        """
+        residual = estimate - self.bias
+        if learn and np.all(np.abs(qd) < self.rest_velocity):
+            rate = dt / self.learning_time
+            self.bias = np.clip(self.bias + rate * residual, -bound, bound)
+            self._gravity_learned = self._gravity_learned + rate * (gravity - self._gravity_learned)
+            self.confidence += rate * (1.0 - self.confidence)
+        return estimate - self.bias
+
+    def calibrate(self, bias: FloatArray, gravity: FloatArray) -> None:
+        """Take a bias measured by the start-up calibration at a pose where G = ``gravity``."""
+        self.bias = np.array(bias, dtype=float)
+        self._gravity_learned = np.array(gravity, dtype=float)
+        self.confidence = 1.0
+
+    def tolerance(self, gravity: FloatArray) -> FloatArray:
+        """Error that may remain after removing the bias [Nm].
+
+        The gravity model's: all of it before anything is learned, only its change since
+        the bias was learned after.
+        """
+        unknown = np.abs(gravity)
+        changed = np.abs(gravity - self._gravity_learned)
+        gravity_error = (1.0 - self.confidence) * unknown + self.confidence * changed
+        return self.mass_uncertainty * gravity_error

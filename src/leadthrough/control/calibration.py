@@ -1,0 +1,241 @@
+"""Start-up calibration: measure the model error before anyone guides the arm.
+
+At rest the momentum observer cannot tell a model error from friction (friction holds
+any torque up to breakaway), so a bias learned at rest is never certain. Sliding, it
+can: friction is then known up to its level. So lead-through starts by moving every
+joint a few mrad back and forth at a slow, constant-ish speed, nobody touching. With
+``τ̂₊`` and ``τ̂₋`` the observer's readings while a joint slides in the positive and
+negative direction (SPEC §5: ``τ̂_ext = τ_ext + (G − G_true) + (τ_f − τ_f,true)``)::
+
+    gravity error   ΔG   = (τ̂₊ + τ̂₋) / 2      (= G_model − G_true at q₀)
+    Coulomb error   Δτ_C = (τ̂₊ − τ̂₋) / 2      (= τ_C,model − τ_C,true)
+
+The gravity error is explained first by a payload at the flange (a point mass ``m``,
+``G_true = G_model + m · Y(q)`` with ``Y = −J_vᵀ g`` the gravity torque of one
+kilogram at the flange), fitted by least squares, so that it follows the arm to other
+poses; what remains is a bias at q₀. The Coulomb error rescales the friction model.
+Results outside plausible bounds mean someone touched the arm: the calibration is
+refused (one line saying why) and the controller keeps its model.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from leadthrough.control.tracking import JointTracker
+from leadthrough.errors import ParameterError
+from leadthrough.friction.model import FrictionModel
+from leadthrough.model.description import FloatArray, RobotDescription
+from leadthrough.model.dynamics import Dynamics
+from leadthrough.trajectories import triangular_velocity
+from leadthrough.validation import real
+
+BoolArray = NDArray[np.bool_]
+
+#: A joint faster than this fraction of the calibration speed slides [–].
+_SLIDING = 0.25
+#: Sliding readings needed in each direction [–].
+_ENOUGH = 3
+#: A joint this many strokes off its calibration motion has been pushed [–].
+_DISTURBED = 4.0
+
+
+@dataclass(frozen=True)
+class CalibrationParameters:
+    """The calibration motion and what it accepts.
+
+    Attributes:
+        stroke: How far each joint moves from where it rests, and back [rad].
+        speed: Peak joint speed [rad/s]; readings above a quarter of it count as sliding.
+        cycles: Back-and-forth cycles [–].
+        settle_time: Rest before the motion, for the observer to settle [s].
+        bandwidth: Bandwidth of the joint tracking [Hz]: stiff enough that the lightest
+            joint breaks away within a fraction of the stroke.
+        max_payload: Heaviest payload the calibration may report [kg].
+        max_friction_change: Largest relative change of a Coulomb level it may report [–].
+    """
+
+    stroke: float = 0.005
+    speed: float = 0.05
+    cycles: int = 2
+    settle_time: float = 0.1
+    bandwidth: float = 8.0
+    max_payload: float = 2.0
+    max_friction_change: float = 0.5
+
+    def __post_init__(self) -> None:
+        for name in ("stroke", "speed", "bandwidth", "max_payload", "max_friction_change"):
+            real(name, getattr(self, name), minimum=0.0, strict=True, error=ParameterError)
+        real("settle_time", self.settle_time, minimum=0.0, error=ParameterError)
+        if not isinstance(self.cycles, int) or self.cycles < 1:
+            raise ParameterError("cycles", f"must be a whole number >= 1, got {self.cycles!r}")
+
+    @property
+    def frequency(self) -> float:
+        """Frequency of the triangular velocity wave [Hz] (stroke = speed / 4f)."""
+        return self.speed / (4.0 * self.stroke)
+
+    @property
+    def duration(self) -> float:
+        """Length of the whole calibration [s]."""
+        return self.settle_time + self.cycles / self.frequency
+
+
+@dataclass(frozen=True, eq=False)
+class Calibration:
+    """What the calibration measured.
+
+    Attributes:
+        pose: Where it was measured [rad].
+        gravity_error: ``G_model − G_true`` at ``pose`` [Nm].
+        coulomb_error: ``τ_C,model − τ_C,true`` at ``pose`` [Nm].
+        payload: Payload mass at the flange that explains the gravity error best [kg].
+        bias: Gravity error left once the payload is modelled [Nm].
+        friction_scale: True over modelled Coulomb level, per joint [–].
+        accepted: Whether the result is plausible (nobody touched the arm).
+        reason: Why it was refused ("" if accepted).
+        measured: Joints that slid both ways; the others (a joint held by stiction) keep
+            the model as it was (no error, scale 1) and do not enter the payload fit.
+    """
+
+    pose: FloatArray
+    gravity_error: FloatArray
+    coulomb_error: FloatArray
+    payload: float
+    bias: FloatArray
+    friction_scale: FloatArray
+    accepted: bool
+    reason: str = ""
+    measured: BoolArray | None = None
+
+    def summary(self) -> str:
+        """One line: what was measured, or why the calibration was refused."""
+        if not self.accepted:
+            return self.reason
+        scale = self.friction_scale[self.measured]
+        return (f"calibrated: payload {self.payload:.2f} kg, Coulomb levels "
+                f"×{scale.min():.2f}–{scale.max():.2f} of the model, gravity bias up to "
+                f"{np.max(np.abs(self.bias)):.3f} Nm")  # fmt: skip
+
+    def robot(self, nominal: RobotDescription) -> RobotDescription:
+        """The description with the measured payload."""
+        return nominal.with_payload(self.payload) if self.accepted else nominal
+
+    def friction(self, nominal: FrictionModel) -> FrictionModel:
+        """The friction model with the measured Coulomb levels."""
+        if not self.accepted:
+            return nominal
+        return dataclasses.replace(nominal, coulomb=nominal.coulomb * self.friction_scale)
+
+
+class CalibrationRun:
+    """The calibration motion around the pose the arm rests at, and its readings.
+
+    Args:
+        dynamics: Model of the arm.
+        friction: Friction model (its mean at the reference speed is fed forward).
+        pose: Where the arm rests [rad].
+        parameters: Motion settings.
+    """
+
+    def __init__(
+        self,
+        dynamics: Dynamics,
+        friction: FrictionModel,
+        pose: ArrayLike,
+        parameters: CalibrationParameters | None = None,
+    ) -> None:
+        self.parameters = parameters or CalibrationParameters()
+        self.dynamics, self.friction = dynamics, friction
+        self.pose = np.array(pose, dtype=float)
+        low, high = dynamics.robot.q_min, dynamics.robot.q_max
+        # move into the side with more room (a joint resting near a limit moves away from it)
+        self._direction = np.where(high - self.pose >= self.pose - low, 1.0, -1.0)
+        self.tracker = JointTracker(
+            dynamics, bandwidth=self.parameters.bandwidth, reference_pose=self.pose
+        )
+        # an integral holds a load the model does not know (a payload) within the stroke
+        self._integral_gain = self.tracker.kp * 2.0 * np.pi * self.parameters.bandwidth / 4.0
+        self._error_integral = np.zeros_like(self.pose)
+        self._last_t = 0.0
+        self.disturbance: str | None = None  # why the calibration must stop, if it must
+        self._plus: list[FloatArray] = []
+        self._minus: list[FloatArray] = []
+
+    @property
+    def duration(self) -> float:
+        """Length of the calibration [s]."""
+        return self.parameters.duration
+
+    def command(self, t: float, q: FloatArray, qd: FloatArray) -> FloatArray:
+        """Torque [Nm] tracking the calibration motion at time ``t`` [s] from its start."""
+        p = self.parameters
+        moving = max(t - p.settle_time, 0.0)
+        offset, velocity, acceleration = triangular_velocity(moving, p.speed, p.frequency)
+        if t < p.settle_time:
+            velocity = acceleration = 0.0
+        d = self._direction
+        q_ref, qd_ref = self.pose + d * offset, d * velocity
+        error = np.abs(q_ref - q)
+        if self.disturbance is None and np.max(error) > _DISTURBED * p.stroke:
+            joint = int(np.argmax(error))
+            self.disturbance = (f"joint {joint + 1} was {1e3 * error[joint]:.0f} mrad off the "
+                                "calibration motion: was the arm touched?")  # fmt: skip
+        self._error_integral += (q_ref - q) * max(t - self._last_t, 0.0)
+        self._last_t = t
+        friction = self.friction.mean(qd_ref, q_ref)
+        integral = self._integral_gain * self._error_integral
+        return friction + integral + self.tracker.torque(q, qd, q_ref, qd_ref, d * acceleration)
+
+    def record(self, t: float, qd: FloatArray, estimate: FloatArray) -> None:
+        """Keep the observer's reading of sliding joints, by direction."""
+        if t < self.parameters.settle_time:
+            return
+        sliding = _SLIDING * self.parameters.speed
+        self._plus.append(np.where(qd > sliding, estimate, np.nan))
+        self._minus.append(np.where(qd < -sliding, estimate, np.nan))
+
+    def result(self) -> Calibration:
+        """The model error measured (refused with a reason when implausible)."""
+        p = self.parameters
+        if self.disturbance is not None:
+            return self._refused(self.disturbance)
+        plus, minus = np.array(self._plus), np.array(self._minus)
+        slid = np.sum(np.isfinite(plus), axis=0) >= _ENOUGH
+        slid &= np.sum(np.isfinite(minus), axis=0) >= _ENOUGH
+        if np.count_nonzero(slid) < 0.5 * slid.size:
+            joints = ", ".join(str(j + 1) for j in np.flatnonzero(~slid))
+            return self._refused(f"joint(s) {joints} did not slide both ways")
+        e_plus = np.nanmedian(np.where(slid, plus, 0.0), axis=0)
+        e_minus = np.nanmedian(np.where(slid, minus, 0.0), axis=0)  # a stuck joint: no error
+        gravity_error, coulomb_error = 0.5 * (e_plus + e_minus), 0.5 * (e_plus - e_minus)
+        level = self.friction.coulomb_level(self.pose)
+        scale = 1.0 - coulomb_error / np.maximum(level, 1e-9)
+        changed = np.abs(scale - 1.0) > p.max_friction_change
+        if np.any(changed):
+            joint = int(np.argmax(np.abs(scale - 1.0)))
+            return self._refused(f"joint {joint + 1}'s friction seems {scale[joint]:.2f}× the "
+                                 "model's: was the arm touched?")  # fmt: skip
+        per_kilogram = self.payload_regressor(self.pose)
+        fitted = np.where(slid, per_kilogram, 0.0)  # only the joints that were measured
+        payload = max(float(-fitted @ gravity_error / (fitted @ fitted)), 0.0)
+        if payload > p.max_payload:
+            return self._refused(f"a payload of {payload:.2f} kg is more than the "
+                                 f"{p.max_payload:g} kg allowed: was the arm touched?")  # fmt: skip
+        bias = np.where(slid, gravity_error + payload * per_kilogram, 0.0)
+        return Calibration(self.pose, gravity_error, coulomb_error, payload, bias, scale, True,
+                           measured=slid)  # fmt: skip
+
+    def payload_regressor(self, q: FloatArray) -> FloatArray:
+        """Gravity torque of one kilogram at the flange, ``Y = −J_vᵀ g`` [Nm/kg]."""
+        return -self.dynamics.jacobian(q)[:3].T @ self.dynamics.robot.gravity
+
+    def _refused(self, reason: str) -> Calibration:
+        n = self.pose.shape[0]
+        zeros = np.zeros(n)
+        return Calibration(self.pose, zeros, zeros, 0.0, zeros, np.ones(n), False,
+                           f"calibration refused: {reason}", np.zeros(n, dtype=bool))  # fmt: skip

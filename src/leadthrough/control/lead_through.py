@@ -1,0 +1,294 @@
+"""Lead-through control: passive and active, behind the safety supervisor (SPEC §4, §6, §7).
+
+One step, in order:
+
+1. the supervisor checks the sensor sample (a bad one → the safe stop, this period);
+2. feed-forward ``τ_ff = G(q) + τ_fc(q̇) + dither`` (thesis eq. 6.3, §5.3);
+3. the Kalman observer estimates ``τ̂_ext`` from the measured torque (or the command
+   sent, if the robot measures none), dither removed;
+4. model error must not become motion: a bias learned while the arm rests is removed
+   from ``τ̂_ext`` and what remains passes a dead-zone as wide as the model's remaining
+   uncertainty (friction error and noise, gravity error, :mod:`leadthrough.control.bias`);
+5. active mode: the admittance model turns the operator torque (plus virtual
+   constraints) into references that stay clear of the joint limits, tracked by a PD
+   (thesis eqs. 6.4–6.6); near an end-stop a push *away* from it is taken for the
+   stop's reaction, not the operator's (the failure of thesis §6.3.2);
+6. the supervisor limits the command (torque, speed, soft walls).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from leadthrough.control.admittance import (
+    AdmittanceState,
+    admittance_step,
+    dead_zone,
+    keep_within,
+    operator_started,
+    tracking_torque,
+)
+from leadthrough.control.bias import ModelErrorBias
+from leadthrough.control.calibration import Calibration, CalibrationRun
+from leadthrough.control.constraints import VirtualConstraint, constraint_torque
+from leadthrough.control.feedforward import PassiveFeedForward
+from leadthrough.control.parameters import LeadThroughParameters, Mode
+from leadthrough.errors import ParameterError
+from leadthrough.estimation.observer import MomentumObserver
+from leadthrough.friction.model import FrictionModel
+from leadthrough.model.description import FloatArray, RobotDescription
+from leadthrough.model.dynamics import Dynamics
+from leadthrough.safety.supervisor import SafetyEvent, SafetySupervisor, SupervisorState
+
+
+class LeadThrough:
+    """Hand-guiding controller: ``tau_cmd = ctl.step(q, qd, tau_measured)`` once per period.
+
+    Args:
+        robot: The arm.
+        mode: ``"passive"`` or ``"active"`` (overrides ``parameters.mode``).
+        dt: Control period [s].
+        friction: Friction model (e.g. an identified one); default the description's.
+        parameters: All other settings.
+        constraints: Virtual constraints on the tool.
+    """
+
+    def __init__(
+        self,
+        robot: RobotDescription,
+        mode: Mode | None = None,
+        dt: float = 0.004,
+        friction: FrictionModel | None = None,
+        parameters: LeadThroughParameters | None = None,
+        constraints: Sequence[VirtualConstraint] = (),
+    ) -> None:
+        parameters = parameters or LeadThroughParameters()
+        if mode is not None and mode != parameters.mode:
+            parameters = LeadThroughParameters(**{**parameters.__dict__, "mode": mode})
+        self.parameters = parameters
+        self.robot, self.dt = robot, dt
+        friction = friction or FrictionModel.from_robot(robot)
+        if friction.n_joints != robot.n_joints:
+            raise ParameterError("friction", f"has {friction.n_joints} joints, the robot "
+                                             f"{robot.n_joints}")  # fmt: skip
+        self.nominal_friction = friction
+        self.constraints = tuple(constraints)
+        self.supervisor = SafetySupervisor(Dynamics(robot), dt, parameters.safety)
+        self._reference_low = robot.q_min + parameters.limit_zone
+        self._reference_high = robot.q_max - parameters.limit_zone
+        self.reset()
+
+    def _build(self, robot: RobotDescription, friction: FrictionModel) -> None:
+        """The model-based parts, for the model of ``robot`` (and a payload) and ``friction``."""
+        p = self.parameters
+        self.dynamics = Dynamics(robot)
+        self.supervisor.dynamics = self.dynamics  # one model, computed once per period
+        self.friction = friction
+        self.feed_forward = PassiveFeedForward(self.dynamics, friction, self.dt, p.compensation,
+                                               p.dither, p.measurement_delay)  # fmt: skip
+        self.observer = MomentumObserver(self.dynamics, friction, self.dt, p.observer)
+        inertia = np.diag(self.dynamics.mass(robot.home()))
+        self.virtual_damping = np.maximum(inertia / p.damping_time,
+                                          friction.coulomb / p.coulomb_speed)  # fmt: skip
+        self.kp = inertia * (2.0 * np.pi * p.position_bandwidth) ** 2
+        self.kd = inertia / p.velocity_time
+        relative = (friction.relative_error if p.friction_uncertainty is None
+                    else np.full(robot.n_joints, p.friction_uncertainty))  # fmt: skip
+        relative = np.maximum(relative, p.stiction_margin)
+        self._friction_tolerance = relative * friction.coulomb + 2.0 * friction.noise_std
+        self._speed_cap = p.assist_speed_fraction * robot.velocity_limits
+
+    # --- state a user may read ---------------------------------------------------------
+
+    @property
+    def mode(self) -> Mode:
+        """``"passive"`` or ``"active"``."""
+        return self.parameters.mode
+
+    @property
+    def tau_ext_hat(self) -> FloatArray:
+        """Latest estimated external torque [Nm] (bias not removed)."""
+        return self.observer.tau_ext_hat
+
+    @property
+    def std(self) -> FloatArray:
+        """Standard deviation of :attr:`tau_ext_hat` [Nm]."""
+        return self.observer.std
+
+    @property
+    def operator_torque(self) -> FloatArray:
+        """What drives the admittance: τ̂_ext − bias, through the dead-zone [Nm]."""
+        return self._drive.copy()
+
+    @property
+    def bias(self) -> FloatArray:
+        """Learned model-error bias [Nm]."""
+        return self.model_error.bias.copy()
+
+    @property
+    def state(self) -> SupervisorState:
+        """Supervisor state: teaching, holding or fault."""
+        return self.supervisor.state
+
+    @property
+    def calibrating(self) -> bool:
+        """Whether the start-up calibration is running (nobody may touch the arm)."""
+        return self._calibrating
+
+    @property
+    def calibration_time(self) -> float:
+        """How long the start-up calibration lasts [s] (0 without one)."""
+        calibration = self.parameters.calibration
+        return 0.0 if calibration is None else calibration.duration
+
+    def reset(self) -> None:
+        """Start afresh: nominal model, filters, references, bias and calibration.
+
+        A latched fault is cleared too.
+        """
+        self._build(self.robot, self.nominal_friction)
+        self.supervisor.reset()
+        self.supervisor.teach()
+        p = self.parameters
+        n = self.robot.n_joints
+        self.model_error = ModelErrorBias(n, p.bias_time, p.mass_uncertainty,
+                                          p.compensation.full_velocity)  # fmt: skip
+        self._drive = np.zeros(n)
+        self._idle = 0.0
+        self._references: AdmittanceState | None = None
+        self._sent = deque([np.zeros(n)] * max(p.measurement_delay, 1),
+                           maxlen=max(p.measurement_delay, 1))  # fmt: skip
+        self._time = 0.0
+        self.last_feed_forward = None
+        self.calibration: Calibration | None = None
+        self._calibration_run: CalibrationRun | None = None
+        self._calibration_start = 0.0  # [s], set when the first sample arrives
+        self._calibrating = p.calibration is not None  # the supervisor stays in TEACHING
+
+    # --- the control step --------------------------------------------------------------
+
+    def step(
+        self, q: ArrayLike, qd: ArrayLike, tau_measured: ArrayLike | None = None
+    ) -> FloatArray:
+        """Motor torque command [Nm] for this period (always finite, within the limits).
+
+        Args:
+            q: Joint readings [rad].
+            qd: Joint velocities [rad/s].
+            tau_measured: Motor torque measured over the last period [Nm], if the robot
+                reports one; otherwise the command sent ``measurement_delay`` steps ago.
+        """
+        self._time += self.dt
+        supervisor = self.supervisor
+        if not supervisor.check(self._time, q, qd, tau_measured):
+            return self._send(supervisor.command(self._time, q, qd, np.zeros(self.robot.n_joints)))
+        try:
+            control = self._calibrate if self._calibrating else self._control
+            desired = control(np.asarray(q, float), np.asarray(qd, float), tau_measured)
+        except Exception:  # nothing escapes without the safe stop: a NaN command faults
+            desired = np.full(self.robot.n_joints, np.nan)
+        return self._send(supervisor.command(self._time, q, qd, desired))
+
+    def _send(self, command: FloatArray) -> FloatArray:
+        self._sent.append(command.copy())
+        return command
+
+    def _calibrate(
+        self, q: FloatArray, qd: FloatArray, tau_measured: ArrayLike | None
+    ) -> FloatArray:
+        """One period of the start-up calibration (:mod:`leadthrough.control.calibration`)."""
+        if self._calibration_run is None:
+            self._calibration_run = CalibrationRun(self.dynamics, self.friction, q,
+                                                   self.parameters.calibration)  # fmt: skip
+            self._calibration_start = self._time
+        run, t = self._calibration_run, self._time - self._calibration_start
+        applied = self._sent[0] if tau_measured is None else np.asarray(tau_measured, float)
+        run.record(t, qd, self.observer.update(q, qd, applied))
+        command = run.command(t, q, qd)
+        if t >= run.duration or run.disturbance is not None:
+            self._finish_calibration(run.result())
+            if run.disturbance:  # let the arm go at once: hold it against gravity only
+                return self.dynamics.gravity(q)
+        return command
+
+    def _finish_calibration(self, calibration: Calibration) -> None:
+        """Use what the calibration measured: payload, friction levels, bias at the pose."""
+        self.calibration, self._calibrating = calibration, False
+        self.supervisor.events.append(SafetyEvent(self._time, "calibration", calibration.summary()))
+        if not calibration.accepted:
+            return
+        robot = calibration.robot(self.robot)
+        self._build(robot, calibration.friction(self.nominal_friction))
+        self.model_error.calibrate(calibration.bias, self.dynamics.gravity(calibration.pose))
+
+    def _control(self, q: FloatArray, qd: FloatArray, tau_measured: ArrayLike | None) -> FloatArray:
+        feed_forward = self.feed_forward.step(q, qd)
+        self.last_feed_forward = feed_forward
+        applied = self._sent[0] if tau_measured is None else np.asarray(tau_measured, float)
+        estimate = self.observer.update(q, qd, applied - feed_forward.dither_in_measurement)
+        self._update_drive(estimate, q, qd, feed_forward.gravity)
+        torque = feed_forward.total
+        constraint, _ = constraint_torque(self.constraints, self.dynamics, q, qd)
+        if self.mode == "passive":
+            return torque + constraint
+        return torque + self._admittance(q, qd, self._drive + constraint)
+
+    def _update_drive(
+        self, estimate: FloatArray, q: FloatArray, qd: FloatArray, gravity: FloatArray
+    ) -> None:
+        """Remove the bias learned at rest and apply a dead-zone as wide as the model error."""
+        p = self.parameters
+        plausible = self._friction_tolerance + p.mass_uncertainty * np.abs(gravity)
+        clear_of_limits = bool(np.all((q > self._reference_low) & (q < self._reference_high)))
+        self.model_error.update(estimate, qd, gravity, self.dt, 2.0 * plausible,
+                                learn=clear_of_limits)  # fmt: skip
+        width = self._friction_tolerance + self.model_error.tolerance(gravity)
+        drive = dead_zone(estimate, width, self.model_error.bias)
+        if p.require_motion:
+            drive = operator_started(drive, qd, p.compensation.dead_band)
+        self._drive = drive
+
+    def _admittance(self, q: FloatArray, qd: FloatArray, drive: FloatArray) -> FloatArray:
+        """References from the admittance model, and the PD torque that tracks them.
+
+        A joint the operator does not drive is left to the feed-forward alone (passive):
+        its references follow the measured state, so the PD neither brakes nor holds it
+        and nothing winds up (the same re-anchoring happens when tracking is lost: an
+        end-stop, a collision). Once no joint has been driven for ``release_time`` the
+        operator has let go: the PD brakes the arm to a stop (q̇_ref = 0).
+        """
+        p = self.parameters
+        if p.limit_aware:
+            drive = self._ignore_end_stop_reaction(q, drive)
+        references = self._references or AdmittanceState(q.copy(), qd.copy())
+        self._idle = 0.0 if np.any(drive) else self._idle + self.dt
+        if self._idle > p.release_time:  # the operator has let go: brake to a stop, hold
+            self._references = AdmittanceState(q.copy(), np.zeros_like(q))
+            return tracking_torque(self._references, q, qd, 0.0, self.kd)
+        free = (drive == 0.0) | (np.abs(references.q_ref - q) > p.reanchor_error)
+        references = AdmittanceState(np.where(free, q, references.q_ref),
+                                     np.where(free, qd, references.qd_ref))  # fmt: skip
+        if np.all(free):
+            self._references = references
+            return np.zeros_like(q)
+        references = admittance_step(references, drive, self.dynamics.mass(q), p.inertia_scale,
+                                     self.virtual_damping, self.dt)  # fmt: skip
+        references.qd_ref = np.clip(references.qd_ref, -self._speed_cap, self._speed_cap)
+        if p.limit_aware:
+            references = keep_within(references, self._reference_low, self._reference_high)
+        self._references = references
+        feedback = tracking_torque(references, q, qd, self.kp, self.kd)
+        if p.assist_only:  # the feedback pushes with the operator, never against
+            feedback = np.where(feedback * drive > 0.0, feedback, 0.0)
+        return np.where(free, 0.0, feedback)
+
+    def _ignore_end_stop_reaction(self, q: FloatArray, drive: FloatArray) -> FloatArray:
+        """Near a limit, a torque pushing away from it is the end-stop's reaction."""
+        near_high = q > self._reference_high
+        near_low = q < self._reference_low
+        reaction = (near_high & (drive < 0)) | (near_low & (drive > 0))
+        return np.where(reaction, 0.0, drive)

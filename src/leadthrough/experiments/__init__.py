@@ -1,0 +1,1 @@
+"""Experiments on the twin: thesis studies, the demo, teaching sessions and their reports."""

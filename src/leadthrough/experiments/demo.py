@@ -1,0 +1,111 @@
+"""``leadthrough demo``: the product end to end on the simulated YuMi.
+
+1. identify the friction of the twin (the experiment of thesis §4.1.1);
+2. a simulated operator teaches a path with active lead-through: guiding, a pause, a
+   circle, a press on a table; the session is recorded (MCAP) as it happens;
+3. the recording is read back, planned (filtered, pauses as waypoints, limits checked)
+   and replayed on the twin;
+4. a Markdown report with figures is written.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from leadthrough.control.lead_through import LeadThrough
+from leadthrough.experiments.friction_study import run_friction_study
+from leadthrough.experiments.observer import REALISTIC_TWIN
+from leadthrough.experiments.teach import RecordingController, replay_recording
+from leadthrough.friction.model import FrictionModel
+from leadthrough.model.description import FloatArray, RobotDescription
+from leadthrough.model.dynamics import Dynamics
+from leadthrough.runtime.recording import SessionRecorder, read_recording
+from leadthrough.twin.runner import SimulationResult, simulate
+from leadthrough.twin.session_operator import Action, ScriptedOperator, TeachingSession
+from leadthrough.twin.simulator import DigitalTwin, TwinConfig
+
+#: What the simulated operator does while teaching (times in s).
+TEACHING_SECONDS = 22.0
+
+
+def teaching_actions(robot: RobotDescription) -> list[Action]:
+    """Guide the tool 15 cm, pause, draw a circle, press on the table, lift it back."""
+    session = TeachingSession()
+    every = {action.label: action for action in session.actions(robot)}
+    line, circle = every["pull the tool 15 cm"], every["draw a circle"]
+    press, lift = every["press the tool on the table"], every["lift the tool back"]
+    return [
+        replace(line, start=1.0, stop=5.0),
+        replace(circle, start=6.5, stop=13.5),
+        replace(press, start=14.0, stop=18.0),
+        replace(lift, start=18.5, stop=21.5),
+    ]
+
+
+@dataclass(frozen=True, eq=False)
+class DemoResult:
+    """Everything the report shows.
+
+    Attributes:
+        friction: The identified friction model.
+        taught: The teaching run on the twin (ground truth included).
+        estimate: Recorded estimate of the operator torque [Nm], (N, n).
+        estimate_std: Its standard deviation [Nm], (N, n).
+        events: Supervisor events (t, kind, detail).
+        replayed: The replay run on the twin.
+        replay_error: Replay errors (joint RMS [rad], tool RMS [m], ...).
+        recording_path: Where the session was recorded.
+        seconds: Wall time of each stage [s].
+    """
+
+    friction: FrictionModel
+    taught: SimulationResult
+    estimate: FloatArray
+    estimate_std: FloatArray
+    events: list
+    replayed: SimulationResult
+    replay_error: dict
+    recording_path: Path
+    seconds: dict[str, float]
+
+
+def run_demo(out: Path, robot: RobotDescription, config: TwinConfig = REALISTIC_TWIN,
+             say=print) -> DemoResult:  # fmt: skip
+    """Identify, teach (recorded), replay; return what the report needs."""
+    out.mkdir(parents=True, exist_ok=True)
+    seconds: dict[str, float] = {}
+    clock = time.perf_counter()
+    say("1/4 identifying the friction of the twin (thesis §4.1.1) …")
+    friction = run_friction_study(robot, twin_config=config, progress=True).model
+    friction.save(out / "friction.toml")
+    seconds["identification"] = time.perf_counter() - clock
+
+    clock = time.perf_counter()
+    say("2/4 a simulated operator teaches a path with active lead-through (recorded) …")
+    table = TeachingSession().table(robot)
+    teach_config = replace(config, table=table)
+    twin = DigitalTwin(robot, teach_config, ScriptedOperator(teaching_actions(robot)))
+    path = out / "session.mcap"
+    controller = LeadThrough(robot, "active", twin.dt, friction)
+    with SessionRecorder(path, robot, {"mode": "active", "dt": twin.dt}) as recorder:
+        taught = simulate(twin, RecordingController(controller, recorder), TEACHING_SECONDS)
+    seconds["teaching"] = time.perf_counter() - clock
+
+    clock = time.perf_counter()
+    say(f"3/4 replaying the recorded path ({path.name}) …")
+    recording = read_recording(path)
+    taught = taught.after(recording.t[0], restart_clock=False)  # from the end of the calibration
+    replay_config = replace(teach_config, seed=config.seed + 1)
+    replayed, errors, _ = replay_recording(robot, recording.t, recording.q, friction, replay_config)
+    seconds["replay"] = time.perf_counter() - clock
+    return DemoResult(friction, taught, recording.tau_ext_hat, recording.tau_ext_std,
+                      recording.events, replayed, errors, path, seconds)  # fmt: skip
+
+
+def tool_path(dynamics: Dynamics, q: FloatArray) -> FloatArray:
+    """Flange positions [m] (N, 3) of joint paths (N, n)."""
+    return np.array([dynamics.pose(row)[:3, 3] for row in q])

@@ -1,0 +1,146 @@
+"""The demo's report: Markdown with PNG figures (plots draw, the demo computed)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from leadthrough.experiments.demo import DemoResult, teaching_actions
+from leadthrough.model.description import RobotDescription
+from leadthrough.model.dynamics import Dynamics
+from leadthrough.plots import pyplot
+
+
+def write_report(result: DemoResult, robot: RobotDescription, out: Path) -> Path:
+    """Write ``out/report.md`` and its figures; return the report's path."""
+    plt = pyplot()
+    figures = {
+        "tool_paths.png": _tool_paths(result, robot),
+        "operator_torque.png": _operator_torque(result),
+        "operator_effort.png": _effort(result, robot),
+    }
+    for name, figure in figures.items():
+        figure.savefig(out / name, dpi=100)
+        plt.close(figure)
+    picture = _picture(result, robot, out / "arm.png")
+    report = out / "report.md"
+    report.write_text(_markdown(result, picture), encoding="utf-8")
+    return report
+
+
+def _tool_paths(result: DemoResult, robot: RobotDescription):
+    plt = pyplot()
+    taught = result.taught.flange_position
+    replayed = result.replayed.flange_position
+    figure, axes = plt.subplots(1, 2, figsize=(11, 4.8), constrained_layout=True)
+    for axis, (i, j, label) in zip(axes, ((0, 1, "top view (x, y)"), (1, 2, "side view (y, z)")),
+                                   strict=True):  # fmt: skip
+        axis.plot(taught[:, i], taught[:, j], lw=2.5, label="taught (operator guiding)")
+        axis.plot(replayed[:, i], replayed[:, j], "--", label="replayed")
+        axis.set_title(label)
+        axis.set_xlabel("xyz"[i] + " [m]")
+        axis.set_ylabel("xyz"[j] + " [m]")
+        axis.axis("equal")
+        axis.grid(alpha=0.3)
+        axis.legend(fontsize="small")
+    return figure
+
+
+def _operator_torque(result: DemoResult, joints: tuple[int, ...] = (0, 1, 3)):
+    plt = pyplot()
+    sim = result.taught
+    figure, axes = plt.subplots(len(joints), 1, sharex=True, figsize=(10, 2.6 * len(joints)),
+                                constrained_layout=True)  # fmt: skip
+    for axis, j in zip(axes, joints, strict=True):
+        estimate, band = result.estimate[:, j], 2.0 * result.estimate_std[:, j]
+        axis.fill_between(sim.t, estimate - band, estimate + band, color="tab:blue", alpha=0.15,
+                          label="±2 std (the observer's own)")  # fmt: skip
+        axis.plot(sim.t, sim.tau_ext[:, j], "k", lw=1.5, label="true (operator + table)")
+        axis.plot(sim.t, estimate, color="tab:blue", label="estimated from motor torques")
+        axis.set_ylim(np.percentile(sim.tau_ext[:, j], 0.5) - 1.5,
+                      np.percentile(sim.tau_ext[:, j], 99.5) + 1.5)  # fmt: skip
+        axis.set_ylabel(f"joint {j + 1} [Nm]")
+        axis.grid(alpha=0.3)
+    axes[0].legend(fontsize="small", ncols=3)
+    axes[-1].set_xlabel("t [s]")
+    return figure
+
+
+def _effort(result: DemoResult, robot: RobotDescription):
+    plt = pyplot()
+    sim = result.taught
+    figure, axis = plt.subplots(figsize=(10, 3.5), constrained_layout=True)
+    axis.plot(sim.t, sim.operator_force, color="k")
+    for action in teaching_actions(robot):
+        axis.axvspan(action.start, action.stop, alpha=0.1)
+        axis.text(action.start, axis.get_ylim()[1] * 0.9, action.label, fontsize="small")
+    axis.set_xlabel("t [s]")
+    axis.set_ylabel("operator's hand force [N]")
+    axis.grid(alpha=0.3)
+    return figure
+
+
+def _picture(result: DemoResult, robot: RobotDescription, path: Path) -> str:
+    """A rendered picture of the arm mid-teaching, or why there is none."""
+    from leadthrough.twin.mjcf import TableSurface
+    from leadthrough.twin.render import RenderError, render_arm, save_png
+    from leadthrough.twin.simulator import DigitalTwin, TwinConfig
+
+    middle = len(result.taught.t) // 2
+    flange = Dynamics(robot).pose(robot.home())[:3, 3]
+    twin = DigitalTwin(robot, TwinConfig(table=TableSurface(flange[2] - 0.12)),
+                       q0=result.taught.q_true[middle])  # fmt: skip
+    try:
+        save_png(render_arm(twin.model, twin.data, lookat=tuple(flange - [0.1, 0.0, 0.1])), path)
+    except RenderError as error:
+        return f"(no picture: {error})"
+    return f"![the arm mid-teaching]({path.name})"
+
+
+def _markdown(result: DemoResult, picture: str) -> str:
+    errors, sim = result.replay_error, result.taught
+    events = [e for e in result.events if e[1] not in ("mode",)]
+    event_lines = "\n".join(f"| {t:.2f} | {kind} | {detail} |" for t, kind, detail in events[:20])
+    seconds = ", ".join(f"{name} {value:.1f} s" for name, value in result.seconds.items())
+    return f"""# leadthrough demo: teaching the simulated YuMi by hand
+
+A simulated operator guides the YuMi twin with **active lead-through**: the controller
+sees only motor torques and encoders; the operator's torques are estimated by the
+momentum Kalman observer. The session was recorded to `{result.recording_path.name}`
+(MCAP: open it in Foxglove) and replayed.
+
+{picture}
+
+## Replay
+Joint RMS error **{1000 * errors["joint_rms"]:.2f} mrad**
+(max {1000 * errors["joint_max"]:.2f} mrad),
+tool path RMS error **{1000 * errors["tool_rms"]:.2f} mm**.
+
+![tool paths](tool_paths.png)
+
+## What the operator did, and what the robot estimated
+![operator torque](operator_torque.png)
+
+Estimation error over the session (all joints, moving samples): RMS
+{_estimation_rms(result):.3f} Nm.
+
+![effort](operator_effort.png)
+
+Operator's hand force: RMS {np.sqrt(np.mean(sim.operator_force**2)):.2f} N,
+peak {sim.operator_force.max():.1f} N.
+
+## Supervisor events
+| t [s] | kind | detail |
+|---|---|---|
+{event_lines or "| – | – | none |"}
+
+Wall time: {seconds}. Friction identified first and saved to `friction.toml`.
+"""
+
+
+def _estimation_rms(result: DemoResult) -> float:
+    sim = result.taught
+    moving = np.abs(sim.qd_true) > 0.01
+    error = (result.estimate - sim.tau_ext)[moving]
+    return float(np.sqrt(np.mean(error**2))) if error.size else float("nan")

@@ -1,0 +1,1 @@
+"""Friction: the probabilistic model, its compensation, identification and logs."""

@@ -1,0 +1,101 @@
+"""Coulomb friction compensation of passive lead-through (thesis §4.2.2, SPEC §4).
+
+Only a fraction ε of the modelled Coulomb friction is compensated, and only once the
+joint moves faster than the velocity noise, so that the arm still stops when released::
+
+    τ_fc(q̇) = 0                                        |q̇| < q̇₀
+            = (|q̇| − q̇₀) / (q̇₁ − q̇₀) · ε τ_C sign(q̇)    q̇₀ ≤ |q̇| < q̇₁
+            = ε τ_C sign(q̇)                             |q̇| ≥ q̇₁
+
+then smoothed by the filter H(z) of eq. (4.6) so that the operator feels no jolt when
+a joint starts moving. While dithering, the dead-band q̇₀ is widened (thesis §5.3).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from leadthrough.errors import ParameterError
+from leadthrough.filters import low_pass
+from leadthrough.friction.model import FrictionModel
+from leadthrough.model.description import FloatArray
+from leadthrough.validation import real
+
+
+@dataclass(frozen=True)
+class CoulombCompensationParameters:
+    """Parameters of the compensation law.
+
+    Attributes:
+        fraction: ε, the compensated fraction of τ_C [–], in [0, 1] (thesis: 0.7).
+        dead_band: q̇₀, no compensation below it [rad/s] (thesis: 0.003, above the noise).
+        full_velocity: q̇₁, full compensation above it [rad/s] (not given in the thesis;
+            0.01 rad/s, a few times q̇₀, ramps in over a fraction of a degree per second).
+    """
+
+    fraction: float = 0.7
+    dead_band: float = 0.003
+    full_velocity: float = 0.01
+
+    def __post_init__(self) -> None:
+        real("fraction", self.fraction, minimum=0.0, error=ParameterError)
+        if self.fraction > 1.0:
+            raise ParameterError("fraction", f"must be ≤ 1, got {self.fraction:g}")
+        real("dead_band", self.dead_band, minimum=0.0, error=ParameterError)
+        if real("full_velocity", self.full_velocity, error=ParameterError) <= self.dead_band:
+            raise ParameterError("full_velocity", "must be above dead_band")
+
+
+def coulomb_compensation(
+    qd: ArrayLike,
+    coulomb: ArrayLike,
+    fraction: float,
+    dead_band: ArrayLike,
+    full_velocity: ArrayLike,
+) -> FloatArray:
+    """The law above, unfiltered [Nm]; arrays broadcast over joints (and samples)."""
+    qd = np.asarray(qd, dtype=float)
+    dead_band = np.asarray(dead_band, dtype=float)
+    ramp = np.clip((np.abs(qd) - dead_band) / (np.asarray(full_velocity) - dead_band), 0.0, 1.0)
+    return ramp * np.sign(qd) * fraction * np.asarray(coulomb, dtype=float)
+
+
+class CoulombCompensation:
+    """The filtered compensation torque, one control period at a time.
+
+    Args:
+        friction: Friction model whose τ_C(q) is compensated.
+        parameters: ε, q̇₀, q̇₁.
+    """
+
+    def __init__(
+        self, friction: FrictionModel, parameters: CoulombCompensationParameters | None = None
+    ) -> None:
+        self.friction = friction
+        self.parameters = parameters or CoulombCompensationParameters()
+        self._torque = np.zeros(friction.n_joints)
+
+    def reset(self) -> None:
+        """Forget the filter state."""
+        self._torque[:] = 0.0
+
+    def step(
+        self, qd: ArrayLike, q: ArrayLike | None = None, dead_band: ArrayLike | None = None
+    ) -> FloatArray:
+        """Filtered compensation torque [Nm], (n,), for velocities q̇ [rad/s].
+
+        Args:
+            qd: Joint velocities [rad/s].
+            q: Joint positions [rad], for a position-dependent Coulomb level.
+            dead_band: Per-joint q̇₀ overriding the parameter (widened while dithering);
+                the ramp then ends at ``max(q̇₁, 2 q̇₀)``.
+        """
+        p = self.parameters
+        band = p.dead_band if dead_band is None else np.asarray(dead_band, dtype=float)
+        full = np.maximum(p.full_velocity, 2.0 * np.asarray(band))
+        raw = coulomb_compensation(qd, self.friction.coulomb_level(q), p.fraction, band, full)
+        self._torque = low_pass(self._torque, raw)
+        return self._torque.copy()

@@ -1,0 +1,327 @@
+"""Automatic identification of the Gaussian friction model from excitation logs.
+
+The thesis tuned its sigmoids by hand (§4.1.2); here they are fitted. Per log:
+
+1. filter q, q̇ and τ with H(z) of eq. (4.6) and differentiate q̇ for q̈;
+2. the friction torque is what the motors give beyond the rigid body,
+   ``τ_f = τ − (M q̈ + C q̇ + G)`` (SPEC §1, no external torque during the experiment).
+
+Per joint, from the logs where that joint moved:
+
+3. sliding samples (|q̇| ≥ ``sliding_velocity``) fix the Coulomb level, its position
+   dependence and the viscous coefficient by *linear* least squares,
+   ``τ_f = sign(q̇) τ_C (1 + k₁ u + k₂ u²) + c q̇`` (the position terms only where the runs
+   cover enough of the range);
+4. the noise σ is the standard deviation of the sliding residual (the thesis' "variance
+   of the friction torque at high velocities");
+5. the sigmoid slope A and half-width B are fitted (SciPy ``least_squares``, robust loss)
+   to the slow samples with τ_C and c held.
+
+Parameter standard deviations come from the least-squares covariance.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy import linalg, optimize
+
+from leadthrough.errors import LeadthroughError
+from leadthrough.filters import low_pass_signal
+from leadthrough.friction.model import FrictionModel, sigmoid
+from leadthrough.model.description import FloatArray
+from leadthrough.model.dynamics import Dynamics
+
+#: Smallest relative Coulomb error an identification claims (a model is never perfect).
+MIN_RELATIVE_ERROR = 0.03
+
+
+class IdentificationError(LeadthroughError, ValueError):
+    """The logs cannot identify the friction (too short, NaN, a joint that never moved)."""
+
+
+@dataclass(frozen=True)
+class IdentificationSettings:
+    """Choices of the fit.
+
+    Attributes:
+        sliding_velocity: Samples faster than this are sliding [rad/s]; slower ones carry
+            stiction and Stribeck effects that the sigmoid model does not describe.
+        moving_velocity: A joint "moved" in a log when it exceeded this speed [rad/s].
+        minimum_samples: Fewest sliding samples per joint for a fit [–].
+        position_span: Fraction of the joint range the runs must cover to fit the
+            position dependence [–].
+    """
+
+    sliding_velocity: float = 0.04
+    moving_velocity: float = 0.1
+    minimum_samples: int = 200
+    position_span: float = 0.25
+
+
+@dataclass(frozen=True, eq=False)
+class FitReport:
+    """Quality of an identification, per joint (arrays of n).
+
+    Attributes:
+        residual_rms: RMS of the sliding residual [Nm].
+        samples: Sliding samples used [–].
+        parameter_std: Standard deviation of each fitted parameter, by name.
+        position_fitted: Whether the position dependence was fitted.
+        joints: Joints identified (0-based); the others keep NaN in the arrays.
+    """
+
+    residual_rms: FloatArray
+    samples: FloatArray
+    parameter_std: dict[str, FloatArray]
+    position_fitted: np.ndarray
+    joints: tuple[int, ...]
+
+    def __str__(self) -> str:
+        lines = [f"{'joint':>5}{'samples':>9}{'RMS [Nm]':>10}{'±τ_C':>9}{'±c':>9}{'position':>10}"]
+        for j in self.joints:
+            std = self.parameter_std
+            lines.append(
+                f"{j + 1:>5}{self.samples[j]:>9.0f}{self.residual_rms[j]:>10.4f}"
+                f"{std['coulomb'][j]:>9.4f}{std['viscous'][j]:>9.4f}"
+                f"{'yes' if self.position_fitted[j] else 'no':>10}"
+            )
+        return "\n".join(lines)
+
+
+@dataclass(frozen=True, eq=False)
+class FrictionSamples:
+    """Friction torque samples of all logs, after filtering and model removal, (N, n).
+
+    Attributes:
+        q: Filtered joint positions [rad].
+        qd: Filtered joint velocities [rad/s].
+        tau_friction: Friction torque τ − (M q̈ + C q̇ + G) [Nm].
+        moved: Whether each sample's log moved each joint (N, n) booleans.
+    """
+
+    q: FloatArray
+    qd: FloatArray
+    tau_friction: FloatArray
+    moved: np.ndarray
+
+
+def identify_friction(
+    logs: Any,
+    dynamics: Dynamics,
+    joints: Sequence[int] | None = None,
+    settings: IdentificationSettings | None = None,
+    prior: FrictionModel | None = None,
+) -> tuple[FrictionModel, FitReport]:
+    """Fit the Gaussian friction model to excitation logs.
+
+    Args:
+        logs: One log or a list of logs (mappings or objects with arrays ``t`` (N,),
+            ``q``, ``qd``, ``tau`` (N, n)); ``tau`` is the measured motor torque, arm side.
+        dynamics: Model used to remove gravity and inertia torques.
+        joints: Joints to identify (default: every joint that moved in some log).
+        settings: Thresholds of the fit.
+        prior: Values kept for joints not identified (default: the description's).
+
+    Returns:
+        The identified model and its fit report.
+
+    Raises:
+        IdentificationError: A log is malformed, or a requested joint never moved.
+    """
+    settings = settings or IdentificationSettings()
+    samples = friction_samples(logs, dynamics, settings)
+    return fit_friction(samples, dynamics, joints, settings, prior)
+
+
+def fit_friction(
+    samples: FrictionSamples,
+    dynamics: Dynamics,
+    joints: Sequence[int] | None = None,
+    settings: IdentificationSettings | None = None,
+    prior: FrictionModel | None = None,
+) -> tuple[FrictionModel, FitReport]:
+    """The fit of :func:`identify_friction`, on samples from :func:`friction_samples`."""
+    settings = settings or IdentificationSettings()
+    moved = np.flatnonzero(samples.moved.any(axis=0))
+    joints = tuple(moved) if joints is None else tuple(joints)
+    for j in joints:
+        if j not in moved:
+            raise IdentificationError(f"joint {j + 1} never moved faster than "
+                                      f"{settings.moving_velocity:g} rad/s in any log")  # fmt: skip
+    prior = prior or FrictionModel.from_robot(dynamics.robot)
+    values = {name: getattr(prior, name).copy() for name in prior.to_dict()} | {
+        "relative_error": prior.relative_error.copy(),
+        "position_mid": prior.position_mid.copy(),
+        "position_half_range": prior.position_half_range.copy(),
+        "position_linear": prior.position_linear.copy(),
+        "position_quadratic": prior.position_quadratic.copy(),
+    }
+    n = dynamics.n
+    report = _empty_report(n, joints)
+    for j in joints:
+        _fit_joint(j, samples, dynamics, settings, values, report)
+    return FrictionModel(**values), report
+
+
+def friction_samples(
+    logs: Any, dynamics: Dynamics, settings: IdentificationSettings | None = None
+) -> FrictionSamples:
+    """Filtered samples and friction torques of every log, stacked."""
+    settings = settings or IdentificationSettings()
+    logs = [logs] if _is_log(logs) else list(logs)
+    if not logs:
+        raise IdentificationError("no logs given")
+    parts = [_log_samples(i, log, dynamics, settings) for i, log in enumerate(logs)]
+    return FrictionSamples(*(np.concatenate(arrays) for arrays in zip(*parts, strict=True)))
+
+
+def _is_log(value: Any) -> bool:
+    return isinstance(value, Mapping) or hasattr(value, "tau")
+
+
+def log_field(log: Any, name: str, index: int = 0) -> FloatArray:
+    """Array ``name`` of a log given as a mapping or an object."""
+    try:
+        value = log[name] if isinstance(log, Mapping) else getattr(log, name)
+    except (KeyError, AttributeError):
+        raise IdentificationError(f"log {index}: missing '{name}'") from None
+    return np.asarray(value, dtype=float)
+
+
+def _log_samples(
+    index: int, log: Any, dynamics: Dynamics, settings: IdentificationSettings
+) -> tuple[FloatArray, ...]:
+    """(q, q̇, τ_f, moved) of one validated log."""
+    t, q, qd, tau = (log_field(log, name, index) for name in ("t", "q", "qd", "tau"))
+    n = dynamics.n
+    if t.ndim != 1 or len(t) < 50:
+        raise IdentificationError(f"log {index}: too short ({len(t)} samples, need ≥ 50)")
+    for name, array in (("q", q), ("qd", qd), ("tau", tau)):
+        if array.shape != (len(t), n):
+            raise IdentificationError(f"log {index}: '{name}' has shape {array.shape}, "
+                                      f"expected ({len(t)}, {n}) like 't'")  # fmt: skip
+    for name, array in (("t", t), ("q", q), ("qd", qd), ("tau", tau)):
+        bad = np.argwhere(~np.isfinite(array))
+        if bad.size:
+            where = f"sample {bad[0][0]}" + (f", joint {bad[0][1] + 1}" if array.ndim > 1 else "")
+            raise IdentificationError(f"log {index}: '{name}' is not finite at {where}")
+    if np.any(np.diff(t) <= 0):
+        raise IdentificationError(f"log {index}: 't' must increase strictly")
+    q_f, qd_f, tau_f = (low_pass_signal(x) for x in (q, qd, tau))
+    qdd = np.gradient(qd_f, t, axis=0)
+    rigid = np.array([dynamics.inverse_dynamics(*row) for row in zip(q_f, qd_f, qdd, strict=True)])
+    moved = np.abs(qd_f).max(axis=0) > settings.moving_velocity
+    return q_f, qd_f, tau_f - rigid, np.broadcast_to(moved, q.shape)
+
+
+def _empty_report(n: int, joints: tuple[int, ...]) -> FitReport:
+    names = ("coulomb", "viscous", "slope", "half_width", "position_linear", "position_quadratic")
+    return FitReport(
+        residual_rms=np.full(n, np.nan),
+        samples=np.zeros(n),
+        parameter_std={name: np.full(n, np.nan) for name in names},
+        position_fitted=np.zeros(n, dtype=bool),
+        joints=joints,
+    )
+
+
+def _fit_joint(
+    j: int,
+    samples: FrictionSamples,
+    dynamics: Dynamics,
+    settings: IdentificationSettings,
+    values: dict[str, FloatArray],
+    report: FitReport,
+) -> None:
+    """Fit joint ``j`` in place into ``values`` and ``report``."""
+    robot = dynamics.robot
+    mine = samples.moved[:, j]
+    q, qd, tau = samples.q[mine, j], samples.qd[mine, j], samples.tau_friction[mine, j]
+    sliding = np.abs(qd) >= settings.sliding_velocity
+    if sliding.sum() < settings.minimum_samples:
+        raise IdentificationError(f"joint {j + 1}: only {sliding.sum()} samples faster than "
+                                  f"{settings.sliding_velocity:g} rad/s")  # fmt: skip
+    mid, half = 0.5 * (robot.q_min[j] + robot.q_max[j]), 0.5 * (robot.q_max[j] - robot.q_min[j])
+    u = (q - mid) / half
+    with_position = np.ptp(q[sliding]) >= settings.position_span * 2.0 * half
+    theta, std, residual = _fit_sliding(qd[sliding], u[sliding], tau[sliding], with_position)
+    coulomb, viscous = theta[0], theta[-1]
+    values["coulomb"][j], values["viscous"][j] = coulomb, max(viscous, 0.0)
+    values["noise_std"][j] = float(np.std(residual))
+    values["position_mid"][j], values["position_half_range"][j] = mid, half
+    if with_position:
+        values["position_linear"][j] = theta[1] / coulomb
+        values["position_quadratic"][j] = theta[2] / coulomb
+        report.parameter_std["position_linear"][j] = std[1] / coulomb
+        report.parameter_std["position_quadratic"][j] = std[2] / coulomb
+    report.parameter_std["coulomb"][j], report.parameter_std["viscous"][j] = std[0], std[-1]
+    # what is left unexplained: 3 std of the level plus the spread of the sliding residual
+    values["relative_error"][j] = np.clip((3.0 * std[0] + 2.0 * np.std(residual)) / coulomb,
+                                          MIN_RELATIVE_ERROR, 0.5)  # fmt: skip
+    report.residual_rms[j] = float(np.sqrt(np.mean(residual**2)))
+    report.samples[j] = sliding.sum()
+    report.position_fitted[j] = with_position
+    slow = np.abs(qd) < 2.0 * settings.sliding_velocity
+    if slow.sum() >= 20:
+        level = coulomb * (1.0 + values["position_linear"][j] * u[slow]
+                           + values["position_quadratic"][j] * u[slow] ** 2)  # fmt: skip
+        start = (values["slope"][j], values["half_width"][j])
+        params, std = _fit_sigmoids(qd[slow], level, values["viscous"][j],
+                                    values["noise_std"][j], tau[slow], start)  # fmt: skip
+        (values["slope"][j], values["half_width"][j]) = params
+        report.parameter_std["slope"][j], report.parameter_std["half_width"][j] = std
+
+
+def _fit_sliding(
+    qd: FloatArray, u: FloatArray, tau: FloatArray, with_position: bool
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Linear least squares of ``τ = sign(q̇) (a₀ + a₁ u + a₂ u²) + c q̇``: θ, std(θ), residual."""
+    sign = np.sign(qd)
+    columns = [sign, sign * u, sign * u * u, qd] if with_position else [sign, qd]
+    design = np.column_stack(columns)
+    theta = linalg.lstsq(design, tau)[0]
+    residual = tau - design @ theta
+    dof = max(len(tau) - len(theta), 1)
+    covariance = np.linalg.pinv(design.T @ design) * (residual @ residual) / dof
+    return theta, np.sqrt(np.diag(covariance)), residual
+
+
+def _fit_sigmoids(
+    qd: FloatArray,
+    level: FloatArray,
+    viscous: float,
+    noise_std: float,
+    tau: FloatArray,
+    start: tuple[float, float],
+) -> tuple[FloatArray, FloatArray]:
+    """Fit A and B so that the Gaussian model describes the slow samples.
+
+    Both moments are fitted at once, τ_C(q), c and σ held: the mean (4.4) to the
+    friction torque, and the variance v_C² + σ² (4.5) to the squared deviation from that
+    mean, so that near zero velocity, where stiction and Stribeck effects make the
+    friction anything between −τ_S and +τ_S, the model's standard deviation is honest.
+
+    Returns:
+        (A, B) and their standard deviations.
+    """
+    scale = float(np.max(level))
+
+    def residual(log_params: FloatArray) -> FloatArray:
+        slope, half_width = np.exp(log_params)
+        upper = sigmoid(slope * (qd + half_width))
+        lower = sigmoid(slope * (qd - half_width))
+        deviation = tau - (level * (upper + lower - 1.0) + viscous * qd)
+        variance = (level * (upper - lower)) ** 2 + noise_std**2
+        return np.concatenate([deviation, (deviation**2 - variance) / scale])
+
+    bounds = (np.log([50.0, 1e-5]), np.log([1e5, 0.05]))
+    initial = np.clip(np.log(start), bounds[0] + 1e-9, bounds[1] - 1e-9)
+    fit = optimize.least_squares(residual, initial, bounds=bounds, loss="soft_l1", f_scale=0.05)
+    params = np.exp(fit.x)
+    dof = max(2 * len(qd) - 2, 1)
+    covariance = np.linalg.pinv(fit.jac.T @ fit.jac) * 2.0 * fit.cost / dof
+    return params, params * np.sqrt(np.diag(covariance))

@@ -1,0 +1,213 @@
+"""The controller's joint friction: a velocity-dependent Gaussian (thesis §4.1, SPEC §3).
+
+Per joint, two sigmoids bound the friction torque (thesis eqs. 4.2–4.3), with
+``τ_C,max = +τ_C(q)`` and ``τ_C,min = −τ_C(q)``::
+
+    τ_f,max(q̇) = −τ_C + 2 τ_C · s(A (q̇ + B)) + c q̇          s(x) = 1 / (1 + e^−x)
+    τ_f,min(q̇) = −τ_C + 2 τ_C · s(A (q̇ − B)) + c q̇
+
+Their average is the mean friction (4.4) and their half difference the Coulomb
+uncertainty (4.5); a constant term ``σ`` adds measurement noise and irregularities::
+
+    mean(q̇) = (τ_f,max + τ_f,min) / 2 = τ_C (s(A(q̇+B)) + s(A(q̇−B)) − 1) + c q̇
+    v_C(q̇)  = (τ_f,max − τ_f,min) / 2 = τ_C (s(A(q̇+B)) − s(A(q̇−B)))
+    std(q̇)  = sqrt(v_C² + σ²)
+
+so that at rest the friction is anywhere within ±τ_C (mean 0, large std) and once
+moving it is known to within ``σ``. Beyond the thesis, the Coulomb level may depend on
+the joint position (the cable effect of §4.1.3), smoothly, with two parameters::
+
+    τ_C(q) = τ_C · (1 + k₁ u + k₂ u²),   u = (q − q_mid) / q_half ∈ [−1, 1] over the range
+
+Friction here is the ``τ_f`` of SPEC §1 (``M q̈ + C q̇ + G + τ_f = τ + τ_ext``): it has
+the sign of the motion. Everything is vectorised: arrays broadcast as (..., n).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from pathlib import Path
+
+import numpy as np
+import tomli_w
+from numpy.typing import ArrayLike
+
+from leadthrough.errors import ParameterError
+from leadthrough.model.description import FloatArray, RobotDescription
+from leadthrough.validation import real_array
+
+_PARAMETERS = ("coulomb", "slope", "half_width", "viscous", "noise_std")
+_POSITION = ("position_linear", "position_quadratic", "position_mid", "position_half_range")
+_ERROR = ("relative_error",)
+#: Relative error of the Coulomb levels of a model that does not say (Table 4.1 was tuned by
+#: hand: the project's robustness target, friction off by ±20 %).
+DEFAULT_RELATIVE_ERROR = 0.2
+
+
+def sigmoid(x: FloatArray) -> FloatArray:
+    """The logistic function 1 / (1 + e^−x), computed without overflow."""
+    return 0.5 * (1.0 + np.tanh(0.5 * x))
+
+
+@dataclass(frozen=True, eq=False)
+class FrictionModel:
+    """Gaussian joint friction of n joints; every attribute is an (n,) array.
+
+    Attributes:
+        coulomb: Coulomb level τ_C at mid-range [Nm], ≥ 0.
+        slope: Sigmoid slope A [s/rad], > 0.
+        half_width: Sigmoid half-width B [rad/s], ≥ 0.
+        viscous: Viscous coefficient c [Nm s/rad], ≥ 0.
+        noise_std: Velocity-independent standard deviation σ [Nm], ≥ 0.
+        position_linear: k₁ of the position-dependent Coulomb level [–].
+        position_quadratic: k₂ of the position-dependent Coulomb level [–].
+        position_mid: Joint reading where u = 0 [rad].
+        position_half_range: Joint travel from the middle to an end, u = ±1 [rad], > 0.
+        relative_error: How far the true Coulomb level may be from this model's, as a
+            fraction [–] (0.2 unless an identification measured it); controllers size
+            their dead-zones with it.
+    """
+
+    coulomb: FloatArray
+    slope: FloatArray
+    half_width: FloatArray
+    viscous: FloatArray
+    noise_std: FloatArray
+    position_linear: FloatArray | None = None
+    position_quadratic: FloatArray | None = None
+    position_mid: FloatArray | None = None
+    position_half_range: FloatArray | None = None
+    relative_error: FloatArray | None = None
+
+    def __post_init__(self) -> None:
+        given = {name: getattr(self, name) for name in _PARAMETERS + _POSITION + _ERROR}
+        lengths = [np.size(value) for value in given.values() if value is not None]
+        n = max(set(lengths), key=lengths.count)  # the length most fields agree on
+        defaults = {"position_linear": 0.0, "position_quadratic": 0.0, "position_mid": 0.0,
+                    "position_half_range": 1.0,
+                    "relative_error": DEFAULT_RELATIVE_ERROR}  # fmt: skip
+        for name, value in given.items():
+            if value is None:
+                value = np.full(n, defaults[name])
+            if np.shape(value) == (n,) and np.asarray(value).dtype.kind in "fiu":
+                _require(name, np.isfinite(np.asarray(value, dtype=float)), "finite")
+            object.__setattr__(self, name, real_array(name, value, (n,), error=ParameterError))
+        for name in ("coulomb", "half_width", "viscous", "noise_std", "relative_error"):
+            _require(name, getattr(self, name) >= 0.0, "≥ 0")
+        _require("slope", self.slope > 0.0, "> 0")
+        _require("position_half_range", self.position_half_range > 0.0, "> 0")
+        _require("position_linear", _level_stays_positive(self.position_linear,
+                 self.position_quadratic), "such that τ_C(q) > 0 over the whole range")  # fmt: skip
+        object.__setattr__(self, "_half_slope", 0.5 * self.slope)
+        object.__setattr__(self, "_half_slope_width", 0.5 * self.slope * self.half_width)
+        object.__setattr__(self, "_position_dependent", self.has_position_dependence)
+
+    @property
+    def n_joints(self) -> int:
+        """Number of joints n."""
+        return self.coulomb.shape[0]
+
+    @property
+    def has_position_dependence(self) -> bool:
+        """Whether the Coulomb level depends on the joint position."""
+        return bool(np.any(self.position_linear) or np.any(self.position_quadratic))
+
+    @classmethod
+    def from_robot(cls, robot: RobotDescription) -> FrictionModel:
+        """The friction parameters of a description (thesis Table 4.1 for the YuMi)."""
+        values = {name: [getattr(joint.friction, name) for joint in robot.joints]
+                  for name in _PARAMETERS}  # fmt: skip
+        return cls(**values)
+
+    def coulomb_level(self, q: ArrayLike | None = None) -> FloatArray:
+        """Coulomb level τ_C(q) [Nm], (..., n); ``q=None`` gives the mid-range level."""
+        if q is None or not self._position_dependent:
+            return self.coulomb
+        u = (np.asarray(q, dtype=float) - self.position_mid) / self.position_half_range
+        return self.coulomb * (1.0 + self.position_linear * u + self.position_quadratic * u * u)
+
+    def _sigmoid_terms(
+        self, qd: ArrayLike, q: ArrayLike | None
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """τ_C(q), c q̇ and tanh(A (q̇ ± B) / 2), the terms of every output below.
+
+        Since 2 s(x) − 1 = tanh(x/2), the sigmoid pair, mean and uncertainty are sums and
+        differences of the two tanh terms: one evaluation serves them all.
+        """
+        qd = np.asarray(qd, dtype=float)
+        centre = self._half_slope * qd
+        upper = np.tanh(centre + self._half_slope_width)
+        lower = np.tanh(centre - self._half_slope_width)
+        return self.coulomb_level(q), self.viscous * qd, upper, lower
+
+    def bounds(self, qd: ArrayLike, q: ArrayLike | None = None) -> tuple[FloatArray, FloatArray]:
+        """The sigmoid pair (τ_f,max, τ_f,min) of eqs. (4.2)–(4.3) [Nm], each (..., n)."""
+        level, viscous, upper, lower = self._sigmoid_terms(qd, q)
+        return level * upper + viscous, level * lower + viscous
+
+    def mean(self, qd: ArrayLike, q: ArrayLike | None = None) -> FloatArray:
+        """Mean friction torque, eq. (4.4) [Nm], (..., n), with the sign of q̇."""
+        level, viscous, upper, lower = self._sigmoid_terms(qd, q)
+        return 0.5 * level * (upper + lower) + viscous
+
+    def coulomb_uncertainty(self, qd: ArrayLike, q: ArrayLike | None = None) -> FloatArray:
+        """Coulomb uncertainty v_C, eq. (4.5) [Nm], (..., n): ≈ τ_C at rest, → 0 moving."""
+        level, _, upper, lower = self._sigmoid_terms(qd, q)
+        return 0.5 * level * (upper - lower)
+
+    def std(self, qd: ArrayLike, q: ArrayLike | None = None) -> FloatArray:
+        """Standard deviation of the friction torque, sqrt(v_C² + σ²) [Nm], (..., n)."""
+        return np.hypot(self.coulomb_uncertainty(qd, q), self.noise_std)
+
+    def mean_and_std(
+        self, qd: ArrayLike, q: ArrayLike | None = None
+    ) -> tuple[FloatArray, FloatArray]:
+        """:meth:`mean` and :meth:`std` in one evaluation (the observer's hot path)."""
+        level, viscous, upper, lower = self._sigmoid_terms(qd, q)
+        half_level = 0.5 * level
+        return half_level * (upper + lower) + viscous, np.hypot(half_level * (upper - lower),
+                                                                self.noise_std)  # fmt: skip
+
+    def to_dict(self) -> dict[str, list[float]]:
+        """Plain-data form (lists per parameter) for TOML."""
+        names = _PARAMETERS + _ERROR + (_POSITION if self.has_position_dependence else ())
+        return {name: getattr(self, name).tolist() for name in names}
+
+    def save(self, path: str | Path) -> None:
+        """Write the parameters to a TOML file (a ``[friction]`` table of per-joint lists)."""
+        Path(path).write_text(tomli_w.dumps({"friction": self.to_dict()}), encoding="utf-8")
+
+    @classmethod
+    def load(cls, path: str | Path) -> FrictionModel:
+        """Read parameters written by :meth:`save`; errors name the file and the field."""
+        import tomllib
+
+        from leadthrough.errors import RobotDescriptionError
+
+        try:
+            table = tomllib.loads(Path(path).read_text(encoding="utf-8"))["friction"]
+            known = {field.name for field in fields(cls)}
+            unknown = sorted(set(table) - known)
+            if unknown:
+                raise ParameterError(unknown[0], "unknown key")
+            return cls(**table)
+        except (OSError, UnicodeDecodeError) as error:
+            raise RobotDescriptionError(str(path), "", f"cannot read: {error}") from None
+        except (tomllib.TOMLDecodeError, KeyError, TypeError) as error:
+            raise RobotDescriptionError(str(path), "friction", f"malformed: {error}") from None
+        except ParameterError as error:
+            raise RobotDescriptionError(str(path), f"friction.{error.parameter}",
+                                        error.reason) from None  # fmt: skip
+
+
+def _level_stays_positive(linear: FloatArray, quadratic: FloatArray) -> FloatArray:
+    """Whether 1 + k₁ u + k₂ u² > 0 for all u in [−1, 1], per joint."""
+    vertex = np.clip(-linear / np.where(quadratic == 0.0, np.inf, 2.0 * quadratic), -1.0, 1.0)
+    candidates = np.stack([-np.ones_like(linear), np.ones_like(linear), vertex])
+    return np.all(1.0 + linear * candidates + quadratic * candidates**2 > 0.0, axis=0)
+
+
+def _require(name: str, ok: FloatArray, rule: str) -> None:
+    bad = np.flatnonzero(~ok)
+    if bad.size:
+        raise ParameterError(f"{name}[{bad[0]}]", f"must be {rule}")

@@ -1,0 +1,85 @@
+"""One run of joint samples as a robot logged it: the type every log reader returns."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from leadthrough.errors import InputShapeError
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True, eq=False)
+class JointLog:
+    """A run of N samples of an n-joint arm, in the arm's own time base.
+
+    Attributes:
+        t: Sample times [s], shape (N,), strictly increasing (not necessarily uniform,
+            not necessarily starting at 0).
+        q: Joint readings [rad], shape (N, n).
+        qd: Joint velocities [rad/s], shape (N, n), as the robot reported them.
+        tau: Measured joint torque, arm side [Nm], shape (N, n): from torque sensors,
+            or K·i from motor currents and the robot's torque constants; None when
+            neither is known.
+        current: Motor currents [A], shape (N, n), for drives that report current.
+        extra: Further per-sample columns the file holds (e.g. ``target_current`` [A],
+            ``target_torque`` [Nm]), each with N rows.
+        source: Where the log came from (a file path, or a description).
+        dropped_rows: How many rows of the source were rejected as corrupted.
+    """
+
+    t: FloatArray
+    q: FloatArray
+    qd: FloatArray
+    tau: FloatArray | None = None
+    current: FloatArray | None = None
+    extra: Mapping[str, FloatArray] = field(default_factory=dict)
+    source: str = ""
+    dropped_rows: int = 0
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.t, dtype=float)
+        q = np.atleast_2d(np.asarray(self.q, dtype=float))
+        if t.ndim != 1 or q.shape[0] != t.size:
+            raise InputShapeError(f"{self.source or 'log'}: t {t.shape} and q {q.shape} disagree")
+        for name in ("qd", "tau", "current"):
+            value = getattr(self, name)
+            if value is None:
+                continue
+            value = np.asarray(value, dtype=float)
+            if value.shape != q.shape:
+                raise InputShapeError(
+                    f"{self.source or 'log'}: {name} has shape {value.shape}, q has {q.shape}"
+                )
+            object.__setattr__(self, name, value)
+        for name, value in self.extra.items():
+            if len(value) != t.size:
+                raise InputShapeError(
+                    f"{self.source or 'log'}: column {name!r} has {len(value)} rows, t has {t.size}"
+                )
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "q", q)
+
+    @property
+    def n_samples(self) -> int:
+        """Number of samples N."""
+        return int(self.t.size)
+
+    @property
+    def n_joints(self) -> int:
+        """Number of joints n."""
+        return int(self.q.shape[1])
+
+    @property
+    def duration(self) -> float:
+        """Time from the first to the last sample [s]."""
+        return float(self.t[-1] - self.t[0]) if self.t.size else 0.0
+
+    @property
+    def median_period(self) -> float:
+        """Median sample period [s] (the log's nominal rate is its inverse)."""
+        return float(np.median(np.diff(self.t))) if self.t.size > 1 else float("nan")

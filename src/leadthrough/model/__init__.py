@@ -1,0 +1,1 @@
+"""Robot model: description, kinematic chain, Pinocchio dynamics, shipped robots."""

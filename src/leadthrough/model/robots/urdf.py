@@ -1,0 +1,190 @@
+"""Load a serial arm from a URDF file into a RobotDescription.
+
+The URDF is parsed by Pinocchio (fixed joints merged into their parents). The chain
+from the root to ``tip`` becomes the arm; any other moving joint (fingers, a second
+arm) is locked at its neutral position, its links merged into the link that carries
+it. URDF carries no gear ratios, rotor inertias or friction sigmoids: gear ratios
+default to 1, rotor inertias to 0, and friction to the URDF ``<dynamics friction
+damping>`` as Coulomb level and viscous coefficient, all overridable.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from leadthrough.errors import RobotDescriptionError
+from leadthrough.model.description import (
+    Joint,
+    JointFriction,
+    JointOrigin,
+    LinkInertial,
+    Placement,
+    RobotDescription,
+)
+from leadthrough.validation import within
+
+_REVOLUTE = {
+    "JointModelRX": np.array([1.0, 0.0, 0.0]),
+    "JointModelRY": np.array([0.0, 1.0, 0.0]),
+    "JointModelRZ": np.array([0.0, 0.0, 1.0]),
+}
+
+#: Sigmoid shape given to URDF friction, which has no such parameters (Table 4.1 values).
+DEFAULT_SLOPE = 5e3
+DEFAULT_HALF_WIDTH = 2e-3
+
+
+def from_urdf(
+    path: str | Path,
+    tip: str | None = None,
+    *,
+    gear_ratios: Sequence[float] | None = None,
+    rotor_inertias: Sequence[float] | None = None,
+    friction: Sequence[JointFriction] | None = None,
+) -> RobotDescription:
+    """Load the serial arm from the URDF root to the link ``tip``.
+
+    Args:
+        path: URDF file.
+        tip: Name of the link (or frame) that is the flange. Without it the moving
+            joints must form one chain, whose last joint frame is the flange.
+        gear_ratios: Gear ratio per chain joint (default 1).
+        rotor_inertias: Motor-side rotor inertia per chain joint [kg m²] (default 0).
+        friction: Friction per chain joint (default from the URDF ``<dynamics>``).
+
+    Raises:
+        RobotDescriptionError: The file is unreadable, not a URDF, ``tip`` is unknown,
+            the joints do not form a serial chain of revolute joints, or a value is
+            invalid; the message names the file and the joint.
+    """
+    source = str(path)
+    if not Path(path).is_file():
+        raise RobotDescriptionError(source, "", "no such file")
+    try:
+        full = pin.buildModelFromUrdf(source)
+    except (ValueError, RuntimeError) as error:
+        raise RobotDescriptionError(source, "", f"not a valid URDF ({error})") from None
+    with within("", source=source):
+        chain_ids, tip_frame = _chain(full, tip)
+        model = _lock_off_chain(full, chain_ids)
+        joints = _joints(model, gear_ratios, rotor_inertias, friction)
+        flange = _flange(model, tip_frame)
+        return RobotDescription(name=full.name or Path(path).stem, joints=joints, flange=flange)
+
+
+def _chain(model: pin.Model, tip: str | None) -> tuple[list[int], str | None]:
+    """Joint ids from the root to ``tip`` (or of the only chain when ``tip`` is None)."""
+    if tip is not None:
+        if not model.existFrame(tip):
+            raise RobotDescriptionError("", "tip", f"no link or frame named {tip!r}")
+        joint_id = model.frames[model.getFrameId(tip)].parentJoint
+    else:
+        joint_id = _single_leaf(model)
+    chain = []
+    while joint_id != 0:
+        chain.append(joint_id)
+        joint_id = model.parents[joint_id]
+    if not chain:
+        raise RobotDescriptionError("", "tip", "no moving joint between the root and the tip")
+    return chain[::-1], tip
+
+
+def _single_leaf(model: pin.Model) -> int:
+    """The last joint of the only chain, or an error naming where the tree branches."""
+    children: dict[int, list[int]] = {}
+    for joint_id in range(1, model.njoints):
+        children.setdefault(model.parents[joint_id], []).append(joint_id)
+    for parent, kids in children.items():
+        if len(kids) > 1:
+            names = ", ".join(repr(model.names[kid]) for kid in kids)
+            where = "the root" if parent == 0 else f"joint {model.names[parent]!r}"
+            raise RobotDescriptionError(
+                "",
+                "tip",
+                f"not a serial chain: {where} carries joints {names}; name the flange link (tip=)",
+            )
+    return model.njoints - 1
+
+
+def _lock_off_chain(model: pin.Model, chain: list[int]) -> pin.Model:
+    locked = [joint_id for joint_id in range(1, model.njoints) if joint_id not in chain]
+    if not locked:
+        return model
+    return pin.buildReducedModel(model, locked, pin.neutral(model))
+
+
+def _joints(
+    model: pin.Model,
+    gear_ratios: Sequence[float] | None,
+    rotor_inertias: Sequence[float] | None,
+    friction: Sequence[JointFriction] | None,
+) -> tuple[Joint, ...]:
+    n = model.njoints - 1
+    gear = np.ones(n) if gear_ratios is None else np.asarray(gear_ratios, dtype=float)
+    rotor = np.zeros(n) if rotor_inertias is None else np.asarray(rotor_inertias, dtype=float)
+    for name, values in (("gear_ratios", gear), ("rotor_inertias", rotor)):
+        if values.shape != (n,):
+            raise RobotDescriptionError("", name, f"expected {n} values, got {values.shape}")
+    if friction is not None and len(friction) != n:
+        raise RobotDescriptionError("", "friction", f"expected {n} values, got {len(friction)}")
+    joints = []
+    for i in range(n):
+        joint_id = i + 1
+        with within(f"joints[{i}] ({model.names[joint_id]})"):
+            joints.append(
+                _joint(
+                    model, joint_id, gear[i], rotor[i], None if friction is None else friction[i]
+                )
+            )
+    return tuple(joints)
+
+
+def _joint(
+    model: pin.Model, joint_id: int, gear: float, rotor: float, friction: JointFriction | None
+) -> Joint:
+    joint_model = model.joints[joint_id]
+    kind = joint_model.shortname()
+    if kind in _REVOLUTE:
+        axis = _REVOLUTE[kind]
+    elif kind == "JointModelRevoluteUnaligned":
+        axis = np.array(joint_model.extract().axis)
+    elif kind.startswith("JointModelRUB"):
+        reason = "continuous (unbounded) joint: give it <limit lower upper> as a revolute joint"
+        raise RobotDescriptionError("", "type", reason)
+    else:
+        raise RobotDescriptionError("", "type", f"only revolute joints are supported, got {kind}")
+    v = joint_model.idx_v
+    inertia = model.inertias[joint_id]
+    if friction is None:
+        coulomb = float(model.friction[v])
+        friction = JointFriction(
+            coulomb=coulomb,
+            slope=DEFAULT_SLOPE,
+            half_width=DEFAULT_HALF_WIDTH,
+            viscous=float(model.damping[v]),
+            noise_std=0.05 * coulomb,
+        )
+    placement = model.jointPlacements[joint_id]
+    return Joint(
+        name=model.names[joint_id],
+        link=LinkInertial(inertia.mass, inertia.lever, inertia.inertia),
+        position_limits=(model.lowerPositionLimit[v], model.upperPositionLimit[v]),
+        velocity_limit=model.velocityLimit[v],
+        torque_limit=model.effortLimit[v],
+        friction=friction,
+        gear_ratio=gear,
+        rotor_inertia=rotor,
+        origin=JointOrigin(Placement(placement.translation, placement.rotation), axis),
+    )
+
+
+def _flange(model: pin.Model, tip: str | None) -> Placement:
+    """The tip frame in the last chain joint frame (identity without a tip)."""
+    if tip is None:
+        return Placement()
+    placement = model.frames[model.getFrameId(tip)].placement
+    return Placement(placement.translation, placement.rotation)

@@ -1,0 +1,1 @@
+"""Runtime: the robot interface, the control loop, recording and the excitation procedure."""

@@ -1,0 +1,1 @@
+"""Safety: limits, checks on every sample, braking and the supervisor state machine."""
