@@ -1,4 +1,4 @@
-"""The admittance core (thesis §6.2): virtual system, dead-zone, bounds, assisted joints."""
+"""The admittance core (thesis §6.2): virtual system, dead-zone, bounds, operator weight."""
 
 import numpy as np
 import pytest
@@ -8,7 +8,8 @@ from leadthrough.control.admittance import (
     admittance_step,
     dead_zone,
     keep_within,
-    operator_started,
+    operator_weight,
+    virtual_damping,
 )
 
 DT = 0.004
@@ -53,21 +54,29 @@ def test_references_stop_at_the_bounds():
     np.testing.assert_allclose(kept.qd_ref, [0.0, 0.3, -0.3])
 
 
-def test_nothing_is_assisted_while_nothing_moves():
-    """At rest every reading may be model error: however large, none drives the admittance."""
-    drive = np.array([2.0, -1.0, 0.5])
-    assert np.all(operator_started(drive, np.full(3, 1e-3), 3e-3) == 0.0)
+def test_operator_weight_is_smooth_monotone_and_never_amplifies():
+    """The passed torque w·r is continuous, odd, monotone, slope ≤ 1.3; half passes at the knee."""
+    sigma = np.full(4001, 0.5)
+    residual = np.linspace(-5.0, 5.0, 4001)
+    passed = residual * operator_weight(residual, sigma, 0.2)
+    slope = np.diff(passed) / np.diff(residual)
+    assert np.all(slope >= 0.0) and np.all(slope <= 1.3)
+    np.testing.assert_allclose(passed, -passed[::-1], atol=1e-12)
+    np.testing.assert_allclose(operator_weight(np.array([0.1]), np.array([0.5]), 0.2), [0.5])
 
 
-def test_joints_at_rest_are_assisted_while_another_moves_with_the_operator():
-    """Joint 1 moves with its push: it and joint 3 (at rest) are assisted, not joint 2."""
-    drive = np.array([1.0, 0.8, -0.5])
-    qd = np.array([0.05, -0.05, 0.0])
-    np.testing.assert_allclose(operator_started(drive, qd, 3e-3), [1.0, 0.0, -0.5])
+def test_operator_weight_silences_what_the_model_may_read_and_passes_a_real_push():
+    """Inside the model's uncertainty almost nothing passes; ten times outside almost all."""
+    sigma = np.array([1.0, 1.0])
+    weight = operator_weight(np.array([0.01, 1.0]), sigma, 0.1)
+    assert weight[0] < 0.01 and weight[1] > 0.99
+    assert np.all(operator_weight(np.array([3.0, -2.0]), sigma, 0.0) == 1.0)
 
 
-def test_a_joint_moving_against_its_reading_alone_starts_nothing():
-    """The operator braking a joint (or model error against the motion) is not an assist."""
-    drive = np.array([1.0, 0.0, 0.7])
-    qd = np.array([-0.05, 0.0, 0.0])
-    assert np.all(operator_started(drive, qd, 3e-3) == 0.0)
+def test_virtual_damping_rises_smoothly_where_nobody_pushes():
+    """m/T on a pushed joint, (1 + B) m/T on one with weight 0, monotone in between."""
+    inertia = np.array([2.0, 0.5, 1.0])
+    damping = virtual_damping(inertia, 0.25, 5.0, np.array([1.0, 0.0, 0.5]))
+    np.testing.assert_allclose(damping, [2.0 / 0.25, 6.0 * 0.5 / 0.25, 6.0 / 3.5 / 0.25])
+    weights = np.linspace(0.0, 1.0, 101)
+    assert np.all(np.diff(virtual_damping(np.ones(101), 0.25, 5.0, weights)) < 0.0)

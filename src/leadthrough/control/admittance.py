@@ -10,7 +10,15 @@ damping so that it is stable for any D̃::
 and tracked with ``τ_fb = K_P (q_ref − q) + K_D (q̇_ref − q̇)`` (eq. 6.4); ``K_P = 0`` is
 damping control (§6.3.1). References never wind up: they are kept within the soft
 joint limits and re-anchored to the measured state when tracking is lost (an end-stop,
-a collision) or when the operator lets go.
+a collision).
+
+Which part of the estimate is the operator's is weighed smoothly by how far it stands
+out of the model's own uncertainty (:func:`operator_weight`), and the virtual damping
+rises smoothly once nobody pushes (:func:`virtual_damping`). The virtual inertia is
+*heavier* than the arm (k_M > 1): the estimate lags the operator's torque (the
+observer's bandwidth, the command delay), and an admittance lighter than the arm it
+moves turns that lag into a negative damping that a stiff hand makes unstable
+(:mod:`leadthrough.experiments.stability` computes the stable region).
 """
 
 from __future__ import annotations
@@ -77,18 +85,47 @@ def dead_zone(value: FloatArray, width: FloatArray, offset: FloatArray | float =
     return np.where(value > upper, value - upper, np.where(value < lower, value - lower, 0.0))
 
 
-def operator_started(drive: FloatArray, qd: FloatArray, rest_velocity: float) -> FloatArray:
-    """What of the operator torque ``drive`` [Nm] the admittance may act on.
+def operator_weight(residual: FloatArray, uncertainty: FloatArray, knee: float) -> FloatArray:
+    """How much of each joint's residual torque is the operator's, smoothly, in [0, 1).
 
-    A joint moving the way its torque pushes is assisted; one moving against it is not
-    (the operator brakes it, or the reading is model error); a joint at rest (|q̇| ≤
-    ``rest_velocity`` [rad/s], where the observer is nearly blind) only while another
-    joint moves with the operator: a push that has not broken its stiction yet. With
-    nothing moving nothing is assisted, so model error read at rest cannot start a motion.
+    ``w = z² / (1 + z²)`` with ``z = residual / (knee · uncertainty)``: a residual well
+    inside the model's own uncertainty (friction and gravity error, the observer's std)
+    passes as ``residual³ / (knee σ)²``, almost nothing; one well outside passes almost
+    whole (``residual − (knee σ)² / residual``). There is no threshold to switch on and
+    off, so the assist cannot chatter, and ``d(w r)/dr`` stays within [0, 1.3]: the
+    weighting never amplifies the estimate. ``knee = 0`` passes everything (the thesis).
+
+    Args:
+        residual: Estimated operator torque, bias removed [Nm].
+        uncertainty: Standard deviation of what the model may read without an operator [Nm].
+        knee: Residual, in uncertainties, of which half passes [–].
     """
-    moving = np.abs(qd) > rest_velocity
-    started = moving & (np.sign(qd) * drive > 0.0)
-    return np.where(started | (~moving & started.any()), drive, 0.0)
+    if knee == 0.0:
+        return np.ones_like(residual)
+    z2 = (residual / (knee * np.maximum(uncertainty, 1e-12))) ** 2
+    return z2 / (1.0 + z2)
+
+
+def virtual_damping(
+    inertia: FloatArray, damping_time: float, rest_scale: float, weight: FloatArray
+) -> FloatArray:
+    """Diagonal of D̃ [Nm s/rad]: ``m_ii / damping_time`` while guiding, heavier without.
+
+    ``D̃_ii = m_ii / damping_time · (1 + B) / (1 + B w_i)`` with ``w_i`` the joint's operator
+    weight and ``B = rest_scale``: a joint's damping rises smoothly to ``1 + B`` times its
+    guiding value as its weight falls to 0 (the operator lets go, or does not push that
+    joint). A released joint then stops within about ``k_M · damping_time / (1 + B)``, and
+    a model error ``e`` that leaks through the weight moves it at
+    ``e w (1 + B w) / ((1 + B) D̃_guide)``, quadratically slower as the weight fades,
+    instead of coasting at ``e / D̃``.
+
+    Args:
+        inertia: Diagonal of M(q) [kg m²].
+        damping_time: Time constant m_ii / D̃_ii while guiding [s].
+        rest_scale: Extra damping, in multiples, once nobody pushes [–].
+        weight: :func:`operator_weight` of every joint.
+    """
+    return inertia / damping_time * (1.0 + rest_scale) / (1.0 + rest_scale * weight)
 
 
 def keep_within(state: AdmittanceState, low: FloatArray, high: FloatArray) -> AdmittanceState:

@@ -1,9 +1,11 @@
 """What the observer reads while nobody guides the arm is model error: learn it, remove it.
 
 A momentum observer on an imperfect model reads a torque even when nobody touches the
-arm: the weight of a payload, a mass or centre-of-mass error, a friction offset. Fed
-to an admittance, that becomes motion (SPEC §6). This component learns it as a bias
-while the arm rests, and says how much error may remain: before anything is learned,
+arm: the weight of a payload, a mass or centre-of-mass error, a friction offset, a
+friction level that is off while the released arm still moves. Fed to an admittance,
+that becomes motion (SPEC §6). This component learns it as a bias, as fast as nobody
+guides (at rest, or coasting after a release), and says how much error may remain:
+before anything is learned,
 the whole uncertainty of the gravity model (``mass_uncertainty · |G(q)|``); once the
 bias is learned at a pose, only the uncertainty of how gravity *changed* since then
 (``mass_uncertainty · |G(q) − G(q_learned)|``). The dead-zone of the controller uses it.
@@ -17,21 +19,17 @@ from leadthrough.model.description import FloatArray
 
 
 class ModelErrorBias:
-    """A bias learned at rest, with the gravity uncertainty that remains.
+    """A bias learned while nobody guides, with the gravity uncertainty that remains.
 
     Args:
         n_joints: Number of joints.
-        learning_time: Time constant of the learning [s].
+        learning_time: Time constant of the learning [s] (when nobody guides at all).
         mass_uncertainty: Relative error of the gravity model [–].
-        rest_velocity: All joints slower than this means the arm rests [rad/s].
     """
 
-    def __init__(
-        self, n_joints: int, learning_time: float, mass_uncertainty: float, rest_velocity: float
-    ) -> None:
+    def __init__(self, n_joints: int, learning_time: float, mass_uncertainty: float) -> None:
         self.learning_time = learning_time
         self.mass_uncertainty = mass_uncertainty
-        self.rest_velocity = rest_velocity
         self.bias = np.zeros(n_joints)
         self.confidence = 0.0  # 0: nothing learned, → 1 after a few learning times at rest
         self._gravity_learned = np.zeros(n_joints)
@@ -39,27 +37,26 @@ class ModelErrorBias:
     def update(
         self,
         estimate: FloatArray,
-        qd: FloatArray,
         gravity: FloatArray,
         dt: float,
         bound: FloatArray,
-        learn: bool = True,
+        unguided: float = 1.0,
     ) -> FloatArray:
-        """Learn while the arm rests; return the estimate minus the bias [Nm].
+        """Learn as fast as nobody guides; return the estimate minus the bias [Nm].
 
         Args:
             estimate: Observer estimate [Nm].
-            qd: Joint velocities [rad/s].
             gravity: G(q) [Nm].
             dt: Period [s].
             bound: Largest plausible model error per joint [Nm]: the bias never exceeds it,
                 so a push against an end-stop or an operator holding the arm still is not
                 learned as model error.
-            learn: Whether learning is allowed now (e.g. not at an end-stop).
+            unguided: How sure it is that nobody guides, in [0, 1]: scales the learning
+                rate (0: learn nothing, e.g. at an end-stop or while the operator pushes).
         """
         residual = estimate - self.bias
-        if learn and np.all(np.abs(qd) < self.rest_velocity):
-            rate = dt / self.learning_time
+        if unguided > 0.0:
+            rate = unguided * dt / self.learning_time
             self.bias = np.clip(self.bias + rate * residual, -bound, bound)
             self._gravity_learned = self._gravity_learned + rate * (gravity - self._gravity_learned)
             self.confidence += rate * (1.0 - self.confidence)

@@ -57,6 +57,9 @@ class CalibrationParameters:
             joint breaks away within a fraction of the stroke.
         max_payload: Heaviest payload the calibration may report [kg].
         max_friction_change: Largest relative change of a Coulomb level it may report [–].
+        friction_accuracy: Relative error of a measured Coulomb level away from the
+            calibration pose and speed (position dependence, Stribeck) [–]: what the
+            controller assumes of the friction of the joints that slid.
     """
 
     stroke: float = 0.005
@@ -66,9 +69,12 @@ class CalibrationParameters:
     bandwidth: float = 8.0
     max_payload: float = 2.0
     max_friction_change: float = 0.5
+    friction_accuracy: float = 0.1
 
     def __post_init__(self) -> None:
-        for name in ("stroke", "speed", "bandwidth", "max_payload", "max_friction_change"):
+        names = ("stroke", "speed", "bandwidth", "max_payload", "max_friction_change",
+                 "friction_accuracy")  # fmt: skip
+        for name in names:
             real(name, getattr(self, name), minimum=0.0, strict=True, error=ParameterError)
         real("settle_time", self.settle_time, minimum=0.0, error=ParameterError)
         if not isinstance(self.cycles, int) or self.cycles < 1:
@@ -125,11 +131,21 @@ class Calibration:
         """The description with the measured payload."""
         return nominal.with_payload(self.payload) if self.accepted else nominal
 
-    def friction(self, nominal: FrictionModel) -> FrictionModel:
-        """The friction model with the measured Coulomb levels."""
+    def friction(self, nominal: FrictionModel, accuracy: float | None = None) -> FrictionModel:
+        """The friction model with the measured Coulomb levels.
+
+        Args:
+            nominal: The model before the calibration.
+            accuracy: Relative error of the measured levels [–]; the joints that slid then
+                carry ``min(nominal error, accuracy)``. None keeps the nominal errors.
+        """
         if not self.accepted:
             return nominal
-        return dataclasses.replace(nominal, coulomb=nominal.coulomb * self.friction_scale)
+        error = nominal.relative_error
+        if accuracy is not None and self.measured is not None:
+            error = np.where(self.measured, np.minimum(error, accuracy), error)
+        return dataclasses.replace(nominal, coulomb=nominal.coulomb * self.friction_scale,
+                                   relative_error=error)  # fmt: skip
 
 
 class CalibrationRun:

@@ -7,12 +7,15 @@ One step, in order:
 3. the Kalman observer estimates ``τ̂_ext`` from the measured torque (or the command
    sent, if the robot measures none), dither removed;
 4. model error must not become motion: a bias learned while the arm rests is removed
-   from ``τ̂_ext`` and what remains passes a dead-zone as wide as the model's remaining
-   uncertainty (friction error and noise, gravity error, :mod:`leadthrough.control.bias`);
-5. active mode: the admittance model turns the operator torque (plus virtual
+   from ``τ̂_ext`` (it can only silence a reading, never create one) and what remains
+   is weighed smoothly by how far it stands out of the model's own uncertainty
+   (friction error and noise, gravity error, the observer's std,
+   :func:`~leadthrough.control.admittance.operator_weight`);
+5. active mode: the admittance model (virtual inertia k_M M(q) heavier than the arm,
+   damping that rises once nobody pushes) turns the operator torque (plus virtual
    constraints) into references that stay clear of the joint limits, tracked by a PD
-   (thesis eqs. 6.4–6.6); near an end-stop a push *away* from it is taken for the
-   stop's reaction, not the operator's (the failure of thesis §6.3.2);
+   whose gains follow M(q) (thesis eqs. 6.4–6.6); near an end-stop a push *away* from
+   it is taken for the stop's reaction, not the operator's (the failure of thesis §6.3.2);
 6. the supervisor limits the command (torque, speed, soft walls).
 """
 
@@ -29,8 +32,9 @@ from leadthrough.control.admittance import (
     admittance_step,
     dead_zone,
     keep_within,
-    operator_started,
+    operator_weight,
     tracking_torque,
+    virtual_damping,
 )
 from leadthrough.control.bias import ModelErrorBias
 from leadthrough.control.calibration import Calibration, CalibrationRun
@@ -91,15 +95,14 @@ class LeadThrough:
         self.feed_forward = PassiveFeedForward(self.dynamics, friction, self.dt, p.compensation,
                                                p.dither, p.measurement_delay)  # fmt: skip
         self.observer = MomentumObserver(self.dynamics, friction, self.dt, p.observer)
-        inertia = np.diag(self.dynamics.mass(robot.home()))
-        self.virtual_damping = np.maximum(inertia / p.damping_time,
-                                          friction.coulomb / p.coulomb_speed)  # fmt: skip
-        self.kp = inertia * (2.0 * np.pi * p.position_bandwidth) ** 2
-        self.kd = inertia / p.velocity_time
         relative = (friction.relative_error if p.friction_uncertainty is None
                     else np.full(robot.n_joints, p.friction_uncertainty))  # fmt: skip
         relative = np.maximum(relative, p.stiction_margin)
+        self._friction_relative = relative
+        nominal = self.nominal_friction.relative_error
+        self._viscous_relative = np.maximum(nominal, p.stiction_margin)
         self._friction_tolerance = relative * friction.coulomb + 2.0 * friction.noise_std
+        self._rest_tolerance = p.stiction_margin * friction.coulomb + 2.0 * friction.noise_std
         self._speed_cap = p.assist_speed_fraction * robot.velocity_limits
 
     # --- state a user may read ---------------------------------------------------------
@@ -155,10 +158,9 @@ class LeadThrough:
         self.supervisor.teach()
         p = self.parameters
         n = self.robot.n_joints
-        self.model_error = ModelErrorBias(n, p.bias_time, p.mass_uncertainty,
-                                          p.compensation.full_velocity)  # fmt: skip
+        self.model_error = ModelErrorBias(n, p.bias_time, p.mass_uncertainty)
         self._drive = np.zeros(n)
-        self._idle = 0.0
+        self._weight = np.zeros(n)
         self._references: AdmittanceState | None = None
         self._sent = deque([np.zeros(n)] * max(p.measurement_delay, 1),
                            maxlen=max(p.measurement_delay, 1))  # fmt: skip
@@ -222,7 +224,8 @@ class LeadThrough:
         if not calibration.accepted:
             return
         robot = calibration.robot(self.robot)
-        self._build(robot, calibration.friction(self.nominal_friction))
+        accuracy = self.parameters.calibration.friction_accuracy  # type: ignore[union-attr]
+        self._build(robot, calibration.friction(self.nominal_friction, accuracy))
         self.model_error.calibrate(calibration.bias, self.dynamics.gravity(calibration.pose))
 
     def _control(self, q: FloatArray, qd: FloatArray, tau_measured: ArrayLike | None) -> FloatArray:
@@ -240,51 +243,63 @@ class LeadThrough:
     def _update_drive(
         self, estimate: FloatArray, q: FloatArray, qd: FloatArray, gravity: FloatArray
     ) -> None:
-        """Remove the bias learned at rest and apply a dead-zone as wide as the model error."""
+        """Remove the bias and the friction the model may overstate; weigh what remains.
+
+        The weight compares the residual with what the model may still read without an
+        operator: the gravity error (:class:`ModelErrorBias`), the stiction no sigmoid
+        describes, the friction noise, and the Coulomb uncertainty of the friction model
+        (≈ τ_C at rest, where friction may hold any push of that size unseen, → 0 moving).
+        """
         p = self.parameters
         plausible = self._friction_tolerance + p.mass_uncertainty * np.abs(gravity)
         clear_of_limits = bool(np.all((q > self._reference_low) & (q < self._reference_high)))
-        self.model_error.update(estimate, qd, gravity, self.dt, 2.0 * plausible,
-                                learn=clear_of_limits)  # fmt: skip
-        width = self._friction_tolerance + self.model_error.tolerance(gravity)
-        drive = dead_zone(estimate, width, self.model_error.bias)
-        if p.require_motion:
-            drive = operator_started(drive, qd, p.compensation.dead_band)
-        self._drive = drive
+        unguided = (1.0 - float(np.max(self._weight))) ** 2 if clear_of_limits else 0.0
+        self.model_error.update(estimate, gravity, self.dt, 2.0 * plausible, unguided)
+        residual = dead_zone(estimate, 0.0, self.model_error.bias) - self._friction_margin(q, qd)
+        uncertainty = (self._rest_tolerance + self.model_error.tolerance(gravity)
+                       + self.friction.coulomb_uncertainty(qd, q))  # fmt: skip
+        self._weight = operator_weight(residual, uncertainty, p.assist_knee)
+        self._drive = residual * self._weight
+
+    def _friction_margin(self, q: FloatArray, qd: FloatArray) -> FloatArray:
+        """The friction the model may overstate, along the motion [Nm].
+
+        Removed from the estimate, it makes any friction error read as friction (against
+        the motion), never as a push along it: a released arm cannot run away on a model
+        whose friction is too high. Coulomb part with the (calibrated) level's relative
+        error, viscous part with the nominal model's (the calibration does not see it).
+        """
+        viscous = self.friction.viscous * qd
+        coulomb = self.friction.mean(qd, q) - viscous
+        return self._friction_relative * coulomb + self._viscous_relative * viscous
 
     def _admittance(self, q: FloatArray, qd: FloatArray, drive: FloatArray) -> FloatArray:
         """References from the admittance model, and the PD torque that tracks them.
 
-        A joint the operator does not drive is left to the feed-forward alone (passive):
-        its references follow the measured state, so the PD neither brakes nor holds it
-        and nothing winds up (the same re-anchoring happens when tracking is lost: an
-        end-stop, a collision). Once no joint has been driven for ``release_time`` the
-        operator has let go: the PD brakes the arm to a stop (q̇_ref = 0).
+        Virtual inertia k_M M(q) and damping :func:`virtual_damping`; the PD gains follow
+        the joint inertias m_ii(q). A joint whose tracking is lost (an end-stop, a
+        collision) has its references re-anchored to the measured state: nothing winds up.
         """
         p = self.parameters
         if p.limit_aware:
             drive = self._ignore_end_stop_reaction(q, drive)
+        mass = self.dynamics.mass(q)
+        inertia = np.diag(mass)
         references = self._references or AdmittanceState(q.copy(), qd.copy())
-        self._idle = 0.0 if np.any(drive) else self._idle + self.dt
-        if self._idle > p.release_time:  # the operator has let go: brake to a stop, hold
-            self._references = AdmittanceState(q.copy(), np.zeros_like(q))
-            return tracking_torque(self._references, q, qd, 0.0, self.kd)
-        free = (drive == 0.0) | (np.abs(references.q_ref - q) > p.reanchor_error)
-        references = AdmittanceState(np.where(free, q, references.q_ref),
-                                     np.where(free, qd, references.qd_ref))  # fmt: skip
-        if np.all(free):
-            self._references = references
-            return np.zeros_like(q)
-        references = admittance_step(references, drive, self.dynamics.mass(q), p.inertia_scale,
-                                     self.virtual_damping, self.dt)  # fmt: skip
+        lost = np.abs(references.q_ref - q) > p.reanchor_error
+        references = AdmittanceState(np.where(lost, q, references.q_ref),
+                                     np.where(lost, qd, references.qd_ref))  # fmt: skip
+        damping = virtual_damping(inertia, p.damping_time, p.rest_damping, self._weight)
+        references = admittance_step(references, drive, mass, p.inertia_scale, damping, self.dt)
         references.qd_ref = np.clip(references.qd_ref, -self._speed_cap, self._speed_cap)
         if p.limit_aware:
-            references = keep_within(references, self._reference_low, self._reference_high)
+            # a joint the operator holds inside the limit zone is held where it is, not
+            # pulled back out: keeping it out of the zone is the supervisor's soft wall
+            references = keep_within(references, np.minimum(self._reference_low, q),
+                                     np.maximum(self._reference_high, q))  # fmt: skip
         self._references = references
-        feedback = tracking_torque(references, q, qd, self.kp, self.kd)
-        if p.assist_only:  # the feedback pushes with the operator, never against
-            feedback = np.where(feedback * drive > 0.0, feedback, 0.0)
-        return np.where(free, 0.0, feedback)
+        kp = inertia * (2.0 * np.pi * p.position_bandwidth) ** 2
+        return tracking_torque(references, q, qd, kp, inertia / p.velocity_time)
 
     def _ignore_end_stop_reaction(self, q: FloatArray, drive: FloatArray) -> FloatArray:
         """Near a limit, a torque pushing away from it is the end-stop's reaction."""

@@ -46,21 +46,34 @@ class LeadThroughParameters:
         dither: Dither settings, or None for no dithering (thesis §5.3).
         calibration: Start-up calibration (payload, friction levels, gravity bias), or None
             to start guiding at once with the model as given.
-        observer: Kalman observer tuning (thesis §5.2.1).
+        observer: Kalman observer tuning (thesis §5.2.1, but Q_τ = 100 instead of 10: an
+            estimate that lags less leaves the admittance more stability margin, see
+            :mod:`leadthrough.experiments.stability`).
         safety: Safety supervisor limits (SPEC §7).
-        inertia_scale: k_M of M̃ = k_M M(q) [–]: how heavy the arm feels.
-        damping_time: D̃_ii = m_ii / damping_time [s]: how long the virtual arm coasts;
-            smaller is more damped.
-        position_bandwidth: K_P_ii = m_ii (2π f)² [Hz]; 0 is damping control (§6.3.1).
-        velocity_time: K_D_ii = m_ii / velocity_time [s].
-        coulomb_speed: Floor of the virtual damping, D̃_ii ≥ τ_C,i / coulomb_speed [rad/s]: a
-            push of one Coulomb level never asks for more than this speed (keeps the light
-            wrist joints from twitching on small estimation errors).
-        stiction_margin: Smallest relative Coulomb error the dead-zone assumes [–]: the
-            stiction and Stribeck rise that no sigmoid model describes.
-        mass_uncertainty: Relative error of the link masses the dead-zone tolerates [–].
-        friction_uncertainty: Relative error of the Coulomb levels the dead-zone tolerates
-            [–]; None takes the friction model's own (``FrictionModel.relative_error``).
+        inertia_scale: k_M of M̃ = k_M M(q) [–]. Above 1 on purpose: the estimated operator
+            torque lags the true one (observer bandwidth, delay), and an admittance lighter
+            than the arm turns that lag into negative damping that a stiff hand makes
+            unstable (see :mod:`leadthrough.experiments.stability`). Inertia costs the
+            operator little at teaching speeds; damping is what they feel.
+        damping_time: D̃_ii = m_ii(q) / damping_time while guiding [s]: the force the operator
+            needs for a given speed; smaller is heavier.
+        rest_damping: Once nobody pushes (every operator weight → 0) D̃ rises smoothly to
+            (1 + rest_damping) times its guiding value [–]: the released arm stops instead of
+            coasting, and model error read at rest moves it that much slower.
+        assist_knee: Residual torque, in multiples of the model's uncertainty, of which half
+            passes to the admittance [–] (:func:`~leadthrough.control.admittance.operator_weight`);
+            0 passes everything (the thesis).
+        position_bandwidth: K_P_ii = m_ii(q) (2π f)² [Hz]; 0 is damping control (§6.3.1).
+        velocity_time: K_D_ii = m_ii(q) / velocity_time [s].
+        stiction_margin: Relative Coulomb error at rest that no sigmoid model describes
+            (stiction, Stribeck) [–]; part of what the model may read without an operator,
+            and the smallest friction error assumed.
+        mass_uncertainty: Relative error of the link masses [–]: the gravity error the model
+            may read without an operator.
+        friction_uncertainty: Relative error of the friction levels [–]; None takes the
+            friction model's own (``FrictionModel.relative_error``). That much of the
+            modelled friction is taken off the estimate along the motion, so that a model
+            whose friction is too high reads friction, never a push (no runaway).
         bias_time: Time constant of the learned model-error bias [s].
         reanchor_error: Tracking error that re-anchors the references [rad].
         limit_zone: Near a joint limit (within this of the hard limit) the references
@@ -68,17 +81,9 @@ class LeadThroughParameters:
             (it is the end-stop's reaction) [rad].
         limit_aware: Whether the admittance respects ``limit_zone`` (False reproduces the
             failure of thesis §6.3.2).
-        assist_only: The feedback only ever pushes the way the operator pushes; braking is
-            left to friction, as in passive mode (False: the thesis' PD, which also brakes
-            when the virtual damping asks for it, Fig. 6.4).
         assist_speed_fraction: The admittance never asks a joint for more than this
             fraction of its speed limit [–] (teaching is slow; the tool speed limit of the
             supervisor stays the last word).
-        release_time: No operator torque on any joint for this long means the operator let
-            go: the arm is braked to a stop [s].
-        require_motion: Assist only joints moving the way the estimate pushes and, while
-            one does, joints at rest (at rest the observer is nearly blind and reads model
-            error, end-stops and contacts: with nothing moving, nothing is assisted).
         measurement_delay: Control steps from sending a command to measuring it [–].
     """
 
@@ -88,32 +93,31 @@ class LeadThroughParameters:
     )
     dither: DitherParameters | None = field(default_factory=DitherParameters)
     calibration: CalibrationParameters | None = field(default_factory=CalibrationParameters)
-    observer: ObserverParameters = field(default_factory=ObserverParameters)
+    observer: ObserverParameters = field(
+        default_factory=lambda: ObserverParameters(torque_noise=100.0)
+    )
     safety: SafetyParameters = field(default_factory=SafetyParameters)
-    inertia_scale: float = 0.3
-    damping_time: float = 3.0
+    inertia_scale: float = 2.0
+    damping_time: float = 0.7
+    rest_damping: float = 20.0
+    assist_knee: float = 0.5
     position_bandwidth: float = 1.0
     velocity_time: float = 0.02
     mass_uncertainty: float = 0.05
     friction_uncertainty: float | None = None
-    coulomb_speed: float = 10.0
     stiction_margin: float = 0.05
     bias_time: float = 1.0
     reanchor_error: float = 0.05
     limit_zone: float = 0.2
     limit_aware: bool = True
-    assist_only: bool = True
     assist_speed_fraction: float = 0.3
-    release_time: float = 0.15
-    require_motion: bool = True
     measurement_delay: int = 2
 
     def __post_init__(self) -> None:
         if self.mode not in ("passive", "active"):
             raise ParameterError("mode", f"'passive' or 'active', got {self.mode!r}")
         positive = ("inertia_scale", "damping_time", "velocity_time", "bias_time",
-                    "reanchor_error", "limit_zone", "coulomb_speed",
-                    "assist_speed_fraction", "release_time")  # fmt: skip
+                    "reanchor_error", "limit_zone", "assist_speed_fraction")  # fmt: skip
         for name in positive:
             real(name, getattr(self, name), minimum=0.0, strict=True, error=ParameterError)
         for name in (
@@ -121,6 +125,8 @@ class LeadThroughParameters:
             "mass_uncertainty",
             "measurement_delay",
             "stiction_margin",
+            "rest_damping",
+            "assist_knee",
         ):
             real(name, getattr(self, name), minimum=0.0, error=ParameterError)
         if self.friction_uncertainty is not None:
@@ -136,14 +142,15 @@ class LeadThroughParameters:
     def thesis_unstable(cls, **changes: Any) -> LeadThroughParameters:
         """The settings of thesis §6.3.2 that turn an end-stop into a runaway.
 
-        Very low virtual damping, full virtual inertia, high PD gains, no dead-zone, no
-        bias learning and references free to run into the end-stop.
+        Very low virtual damping, full virtual inertia, high PD gains, the whole estimate
+        fed to the admittance, no bias learning and references free to run into the
+        end-stop.
         """
-        return cls(inertia_scale=1.0, damping_time=20.0, position_bandwidth=6.0,
-                   velocity_time=0.008, mass_uncertainty=0.0, friction_uncertainty=0.0,
-                   bias_time=1e6, reanchor_error=1e6, limit_aware=False, dither=None,
-                   assist_only=False, require_motion=False, release_time=1e6,
-                   **changes)  # fmt: skip
+        return cls(inertia_scale=1.0, damping_time=20.0, rest_damping=0.0, assist_knee=0.0,
+                   position_bandwidth=6.0, velocity_time=0.008, mass_uncertainty=0.0,
+                   friction_uncertainty=0.0, stiction_margin=0.0, bias_time=1e6,
+                   reanchor_error=1e6,
+                   limit_aware=False, dither=None, **changes)  # fmt: skip
 
     @classmethod
     def from_toml(cls, path: str | Path) -> LeadThroughParameters:

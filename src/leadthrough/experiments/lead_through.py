@@ -298,14 +298,10 @@ def damping_runs(
     joint: int = 6,
     config: TwinConfig = REALISTIC_TWIN,
 ) -> dict[str, GuidedRun]:
-    """Figs. 6.4–6.5: a hand turns one joint with high and with low virtual damping.
-
-    The thesis' PD (``assist_only=False``), so that high damping visibly brakes.
-    """
+    """Figs. 6.4–6.5: a hand turns one joint with high and with low virtual damping."""
     runs = {}
     for label, damping_time in (("high damping", 0.05), ("low damping", 3.0)):
-        parameters = LeadThroughParameters(damping_time=damping_time, coulomb_speed=1e3,
-                                           assist_only=False)  # fmt: skip
+        parameters = LeadThroughParameters(damping_time=damping_time)
         runs[label] = _joint_run(robot, joint, friction, config, parameters)
     return runs
 
