@@ -23,11 +23,13 @@ from leadthrough.experiments.observer import (
     identified_without_position,
     single_joint_guiding,
 )
+from leadthrough.experiments.stability import stability_map
 from leadthrough.model.description import RobotDescription
 from leadthrough.plots import friction as friction_plots
 from leadthrough.plots import lead_through as lead_through_plots
 from leadthrough.plots import observer as observer_plots
 from leadthrough.plots import pyplot
+from leadthrough.plots.stability import plot_stability_map
 
 
 def write_experiments(
@@ -75,6 +77,10 @@ def write_experiments(
            "Figs. 5.3–5.4: dither frequency sweep")  # fmt: skip
     say("active lead-through (Figs. 6.4–6.7) …")
     sections.append("## Active lead-through\n")
+    stable = stability_map(robot)
+    figure("stability.png", plot_stability_map(stable),
+           f"coupled stability with a hand: k_M in {stable.stable_scales(3000.0).min():.2g}"
+           "–4 keeps ζ ≥ 0.15 up to 3000 N/m")  # fmt: skip
     figure("fig6_4.png", lead_through_plots.plot_damping(damping_runs(robot, friction), 6),
            "Figs. 6.4–6.5: high and low virtual damping, joint 7")  # fmt: skip
     stops = {"thesis settings": end_stop(robot, LeadThroughParameters.thesis_unstable(), friction),

@@ -1,0 +1,58 @@
+"""The linearised coupled loop of active lead-through with a hand (experiments.stability)."""
+
+import numpy as np
+import pytest
+
+import leadthrough as lt
+from leadthrough.control.parameters import LeadThroughParameters
+from leadthrough.experiments.stability import (
+    MARGIN,
+    JointLoop,
+    least_damping,
+    loop_matrix,
+    stability_map,
+    worst_damping,
+)
+
+DT = 0.004
+
+
+def test_without_control_the_loop_is_the_hand_spring_on_the_arm():
+    """No PD: the arm's modes are the roots of m s² + b s + k = 0 (exactly discretised)."""
+    m, k, b = 0.3, 120.0, 1.5
+    parameters = LeadThroughParameters(position_bandwidth=0.0, velocity_time=1e12)
+    matrix = loop_matrix(JointLoop(m, k, b, (0.3, 10.0)), parameters, DT, delay=1)
+    expected = np.exp(np.roots([m, b, k]) * DT)
+    eigenvalues = np.linalg.eigvals(matrix)
+    for mode in expected:
+        assert np.min(np.abs(eigenvalues - mode)) < 1e-9
+    s = np.roots([m, b, k])
+    assert least_damping(matrix, DT) <= float(-s.real[0] / abs(s[0])) + 1e-9
+
+
+@pytest.fixture(scope="module")
+def yumi_map():
+    """The stable region of the YuMi at home, delays 1 and 2."""
+    return stability_map(lt.robots.yumi(), stiffness=np.array([100.0, 300.0, 1000.0, 3000.0]),
+                         inertia_scale=np.array([0.3, 1.0, 2.0]))  # fmt: skip
+
+
+def test_the_defaults_keep_every_hand_up_to_3000_n_per_m_damped(yumi_map):
+    """k_M = 2 keeps ζ ≥ 0.15 for hands up to 3000 N/m with one or two periods of delay."""
+    assert LeadThroughParameters().inertia_scale in yumi_map.stable_scales(3000.0)
+    assert np.all(yumi_map.damping[:, -1, :] >= MARGIN)
+
+
+def test_an_admittance_lighter_than_the_arm_oscillates_with_a_firm_hand(yumi_map):
+    """k_M = 0.3 (the previous default) has a growing oscillation from 300 N/m on."""
+    assert np.all(yumi_map.damping[:, 0, 1:] < 0.0)
+    assert 0.3 not in yumi_map.stable_scales(3000.0, margin=0.0)
+
+
+def test_more_delay_never_helps():
+    """Two periods of delay leave at most the damping one period leaves."""
+    robot, parameters = lt.robots.yumi(), LeadThroughParameters(inertia_scale=0.5)
+    for hand in (300.0, 3000.0):
+        one = worst_damping(robot, parameters, hand, 1.8 * np.sqrt(hand), DT, delay=1)
+        two = worst_damping(robot, parameters, hand, 1.8 * np.sqrt(hand), DT, delay=2)
+        assert two <= one + 1e-9
