@@ -19,6 +19,7 @@ from leadthrough.errors import (
 from leadthrough.estimation.observer import MomentumObserver, ObserverParameters
 from leadthrough.friction.identification import FitReport, identify_friction
 from leadthrough.friction.model import FrictionModel
+from leadthrough.logs import JointLog, read_log
 from leadthrough.model import robots
 from leadthrough.model.description import (
     DHParameters,
@@ -42,6 +43,7 @@ __all__ = [
     "InputShapeError",
     "Joint",
     "JointFriction",
+    "JointLog",
     "JointOrigin",
     "LeadThrough",
     "LeadThroughParameters",
@@ -57,5 +59,6 @@ __all__ = [
     "__version__",
     "control_loop",
     "identify_friction",
+    "read_log",
     "robots",
 ]

@@ -1,0 +1,273 @@
+"""``read_log``: one robot log in, one :class:`JointLog` out, whatever wrote it.
+
+Formats (detected from the path and the first line, or named with ``format=``):
+
+- ``"ur_csv"``: Universal Robots logs as the RTDE scripts of other labs write them: no
+  header, comma separated, absolute time; columns 1 time [s], 2–7 q [rad], 8–13 q̇
+  [rad/s], 14–19 motor current [A], then 20–25 target current [A] and 26–31 target
+  torque [Nm] (31 columns) or 19 columns, or 25 (20–25 undocumented, kept as
+  ``extra["columns_20_25"]``).
+- ``"panda_txt"``: a folder (or one of its files) with ``*_time.txt``, ``*_positions.txt``,
+  ``*_velocity.txt``, ``*_torques.txt``: one value per line, the n joints of a sample on
+  n consecutive lines; torques from joint torque sensors [Nm].
+- ``"recording"``: the project's own teaching recordings (``.mcap``).
+- ``"excitation"``: the project's excitation logs (``.npz``, or ``.csv`` with a header).
+
+Real logs have corrupted rows. A row is dropped when it has the wrong number of columns
+(a truncated last line), a non-finite or physically impossible value (|q| > 4π rad,
+|q̇| > 20 rad/s, |current| > 100 A, |torque| > 5000 Nm: the ``253.0`` and ``1e300``
+rows of UR logs), a joint reading off the run's own path by more than 0.2 rad (a row of
+zeros in a moving log), or a time not after the previous row's. One warning counts the
+dropped rows and names the first ones; a file with more than half its rows dropped is
+an error naming the file.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from scipy.ndimage import median_filter
+
+from leadthrough.errors import LeadthroughError
+from leadthrough.logs.log import FloatArray, JointLog
+from leadthrough.model.description import RobotDescription
+
+Format = Literal["ur_csv", "panda_txt", "recording", "excitation"]
+
+#: UR CSV column counts that the format allows.
+_UR_WIDTHS = (19, 25, 31)
+#: Largest plausible |value| of a column kind.
+_BOUNDS = {"q": 4.0 * np.pi, "qd": 20.0, "current": 100.0, "torque": 5000.0}
+#: A joint reading farther than this from the run's running median is corrupted [rad].
+_OFF_PATH = 0.2
+#: More than this fraction of rows dropped: the file is not a log.
+_MOSTLY_GARBAGE = 0.5
+
+
+class LogError(LeadthroughError, ValueError):
+    """A file cannot be read as a robot log (the message names the file)."""
+
+
+class LogWarning(UserWarning):
+    """Rows of a log were dropped as corrupted."""
+
+
+def read_log(
+    path: str | Path, robot: RobotDescription | None = None, format: Format | None = None
+) -> JointLog:
+    """Read one robot log.
+
+    Args:
+        path: The log file (or, for ``"panda_txt"``, its folder).
+        robot: The arm, if known: its torque constants turn motor currents into joint
+            torques (``tau = K·i``), and its joint count is checked.
+        format: One of ``"ur_csv"``, ``"panda_txt"``, ``"recording"``, ``"excitation"``;
+            detected when None.
+
+    Raises:
+        LogError: No such file, an unknown format, or a file that is mostly garbage.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise LogError(f"{path}: no such file")
+    kind = format or detect_format(path)
+    readers = {"ur_csv": _read_ur_csv, "panda_txt": _read_panda_txt,
+               "recording": _read_recording, "excitation": _read_excitation}  # fmt: skip
+    if kind not in readers:
+        raise LogError(f"{path}: unknown log format {kind!r} (one of {', '.join(readers)})")
+    log = readers[kind](path)
+    if robot is not None:
+        log = _with_robot(log, robot)
+    return log
+
+
+def detect_format(path: Path) -> Format:
+    """The format of ``path`` from its name and first line (see the module docstring)."""
+    if path.is_dir() or (path.name.startswith("exciting_traj_") and path.suffix == ".txt"):
+        return "panda_txt"
+    if path.suffix == ".mcap":
+        return "recording"
+    if path.suffix == ".npz":
+        return "excitation"
+    try:
+        with path.open(encoding="utf-8", errors="replace") as file:
+            first = file.readline()
+    except OSError as error:
+        raise LogError(f"{path}: cannot read ({error})") from None
+    if first.startswith("run,") or first.startswith("t,"):
+        return "excitation"
+    if first.count(",") + 1 in _UR_WIDTHS:
+        return "ur_csv"
+    raise LogError(f"{path}: unknown log format (not a UR CSV, Panda text, .mcap or excitation "
+                   "log); name it with format=")  # fmt: skip
+
+
+def _with_robot(log: JointLog, robot: RobotDescription) -> JointLog:
+    if log.n_joints != robot.n_joints:
+        raise LogError(f"{log.source}: {log.n_joints} joints, but {robot.name} has "
+                       f"{robot.n_joints}")  # fmt: skip
+    constants = robot.torque_constants
+    if log.tau is not None or log.current is None or constants is None:
+        return log
+    return JointLog(log.t, log.q, log.qd, log.current * constants, log.current, log.extra,
+                    log.source, log.dropped_rows)  # fmt: skip
+
+
+# --- UR CSV ----------------------------------------------------------------------------
+
+
+def _read_ur_csv(path: Path) -> JointLog:
+    rows = _numeric_rows(path)
+    widths = [len(row) for row in rows]
+    width = max(set(widths), key=widths.count) if widths else 0
+    if width not in _UR_WIDTHS:
+        raise LogError(f"{path}: rows have {width} columns, a UR log has 19, 25 or 31")
+    complete = np.array([len(row) == width for row in rows])
+    table = np.full((len(rows), width), np.nan)
+    for i, row in enumerate(rows):
+        if complete[i]:
+            table[i] = row
+    targets = ["current"] * 6 + ["torque"] * 6 if width == 31 else ["other"] * 6  # 25: unnamed
+    kinds = ["time"] + ["q"] * 6 + ["qd"] * 6 + ["current"] * 6 + targets
+    keep = complete & _plausible(table, kinds[:width]) & _on_path(table[:, 1:7], complete)
+    keep &= _time_increases(table[:, 0], keep)
+    table = _accept(path, table, keep, len(rows))
+    extra = {}
+    if width == 25:  # columns 20–25 of these files are not documented: kept, not named
+        extra["columns_20_25"] = table[:, 19:25]
+    if width == 31:
+        extra["target_current"], extra["target_torque"] = table[:, 19:25], table[:, 25:31]
+    return JointLog(table[:, 0], table[:, 1:7], table[:, 7:13], None, table[:, 13:19], extra,
+                    str(path), int(len(rows) - keep.sum()))  # fmt: skip
+
+
+def _numeric_rows(path: Path) -> list[list[float]]:
+    """Every non-empty line as floats; an unparsable line becomes an empty row."""
+    try:
+        lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
+    except OSError as error:
+        raise LogError(f"{path}: cannot read ({error})") from None
+    rows = []
+    for line in lines:
+        if not line.strip():
+            continue
+        try:
+            rows.append([float(value) for value in line.split(",")])
+        except ValueError:
+            rows.append([])
+    return rows
+
+
+def _plausible(table: FloatArray, kinds: list[str]) -> np.ndarray:
+    """Rows whose every value is finite and within its kind's physical bound."""
+    bounds = np.array([_BOUNDS.get(kind, np.inf) for kind in kinds])
+    with np.errstate(invalid="ignore"):
+        return np.all(np.isfinite(table) & (np.abs(table) <= bounds), axis=1)
+
+
+def _on_path(q: FloatArray, candidates: np.ndarray, window: int = 9) -> np.ndarray:
+    """Rows whose joint readings lie within :data:`_OFF_PATH` of the running median."""
+    ok = candidates & np.all(np.isfinite(q), axis=1) & np.all(np.abs(q) <= _BOUNDS["q"], axis=1)
+    result = np.zeros(len(q), dtype=bool)
+    index = np.flatnonzero(ok)
+    if index.size == 0:
+        return result
+    values = q[index]
+    median = median_filter(values, size=(min(window, len(values)), 1), mode="nearest")
+    result[index] = np.all(np.abs(values - median) <= _OFF_PATH, axis=1)
+    return result
+
+
+def _time_increases(t: FloatArray, keep: np.ndarray) -> np.ndarray:
+    """``keep`` without the rows whose time is not after the last kept row's."""
+    result = keep.copy()
+    last = -np.inf
+    for i in np.flatnonzero(keep):
+        if t[i] <= last:
+            result[i] = False
+        else:
+            last = t[i]
+    return result
+
+
+def _accept(path: Path, table: FloatArray, keep: np.ndarray, total: int) -> FloatArray:
+    """The kept rows; a warning for the dropped ones, an error if they are most."""
+    dropped = np.flatnonzero(~keep)
+    if total == 0 or dropped.size > _MOSTLY_GARBAGE * total:
+        raise LogError(f"{path}: {dropped.size} of {total} rows are corrupted: not a usable log")
+    if dropped.size:
+        first = ", ".join(str(i + 1) for i in dropped[:5])
+        more = ", …" if dropped.size > 5 else ""
+        warnings.warn(f"{path}: dropped {dropped.size} of {total} rows as corrupted "
+                      f"(rows {first}{more})", LogWarning, stacklevel=4)  # fmt: skip
+    return table[keep]
+
+
+# --- Panda text ------------------------------------------------------------------------
+
+
+def _read_panda_txt(path: Path) -> JointLog:
+    folder = path if path.is_dir() else path.parent
+    files = {kind: sorted(folder.glob(f"*_{kind}.txt")) for kind in
+             ("time", "positions", "velocity", "torques")}  # fmt: skip
+    missing = [kind for kind, found in files.items() if len(found) != 1]
+    if missing:
+        raise LogError(f"{folder}: a Panda text log needs one *_{missing[0]}.txt file")
+    columns = {kind: _one_per_line(found[0]) for kind, found in files.items()}
+    t = columns["time"]
+    n = columns["positions"].size // max(t.size, 1)
+    if n < 1 or any(columns[kind].size != n * t.size for kind in ("positions", "velocity",
+                                                                  "torques")):  # fmt: skip
+        raise LogError(f"{folder}: {t.size} times do not match {columns['positions'].size} "
+                       "positions, velocities or torques")  # fmt: skip
+    q, qd, tau = (columns[kind].reshape(t.size, n) for kind in ("positions", "velocity", "torques"))
+    table = np.column_stack([t, q, qd, tau])
+    kinds = ["time"] + ["q"] * n + ["qd"] * n + ["torque"] * n
+    keep = _plausible(table, kinds)
+    keep = _time_increases(t, keep & _on_path(q, keep))
+    table = _accept(folder, table, keep, t.size)
+    return JointLog(table[:, 0], table[:, 1:1 + n], table[:, 1 + n:1 + 2 * n],
+                    table[:, 1 + 2 * n:], source=str(folder),
+                    dropped_rows=int(t.size - keep.sum()))  # fmt: skip
+
+
+def _one_per_line(path: Path) -> FloatArray:
+    values = []
+    for line in path.read_text(encoding="utf-8", errors="replace").split():
+        try:
+            values.append(float(line))
+        except ValueError:
+            values.append(np.nan)
+    return np.array(values)
+
+
+# --- the project's own files -----------------------------------------------------------
+
+
+def _read_recording(path: Path) -> JointLog:
+    from leadthrough.errors import RecordingError
+    from leadthrough.runtime.recording import read_recording
+
+    try:
+        recording = read_recording(path)
+    except RecordingError as error:
+        raise LogError(str(error)) from None
+    extra = {"tau_ext_hat": recording.tau_ext_hat, "tau_ext_std": recording.tau_ext_std}
+    return JointLog(recording.t, recording.q, recording.qd, recording.tau, None, extra,
+                    str(path))  # fmt: skip
+
+
+def _read_excitation(path: Path) -> JointLog:
+    from leadthrough.friction.logs import LogFileError, load_logs
+
+    try:
+        runs = load_logs(path)
+    except LogFileError as error:
+        raise LogError(str(error)) from None
+    if len(runs) != 1:
+        raise LogError(f"{path}: holds {len(runs)} runs; read them with friction.logs.load_logs")
+    run = runs[0]
+    return JointLog(run["t"], run["q"], run["qd"], run["tau"], source=str(path))

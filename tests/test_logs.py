@@ -1,0 +1,125 @@
+"""Reading robot logs: UR CSV, Panda text, the project's files; corrupted rows dropped loudly."""
+
+import numpy as np
+import pytest
+
+import leadthrough as lt
+from leadthrough.logs import LogError, LogWarning, detect_format
+from realdata import REALDATA, needs_realdata
+
+
+def _ur_rows(n: int, width: int = 31, t0: float = 1234.5) -> np.ndarray:
+    """A plausible UR log: q moving slowly, currents of a few amperes."""
+    t = t0 + 0.008 * np.arange(n)
+    q = 1.0 + 0.3 * np.sin(np.outer(t - t0, np.arange(1, 7) * 0.5))
+    qd = np.gradient(q, t, axis=0)
+    current = 0.5 + 0.1 * q
+    table = [t, *q.T, *qd.T, *current.T]
+    if width >= 25:
+        table += [*(1.1 * current).T]
+    if width == 31:
+        table += [*(11.0 * current).T]
+    return np.column_stack(table)
+
+
+def _write(path, table, extra_lines=()):
+    lines = [",".join(f"{v:.6f}" for v in row) for row in table]
+    lines.extend(extra_lines)
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_a_clean_ur_log_reads_whole_and_currents_become_torques(tmp_path):
+    """Every row kept; with the UR10e's K, tau = K·i; the 31-column targets kept by name."""
+    table = _ur_rows(200)
+    log = lt.read_log(_write(tmp_path / "run.csv", table), lt.robots.ur10e())
+    assert log.n_samples == 200 and log.n_joints == 6 and log.dropped_rows == 0
+    np.testing.assert_allclose(log.t, table[:, 0], atol=1e-6)
+    np.testing.assert_allclose(log.tau, table[:, 13:19] * lt.robots.ur10e().torque_constants,
+                               atol=1e-5)  # fmt: skip
+    assert set(log.extra) == {"target_current", "target_torque"}
+    assert lt.read_log(tmp_path / "run.csv").tau is None  # no robot: no K, no torque
+
+
+@pytest.mark.parametrize("width", [19, 25])
+def test_narrower_ur_logs_read(tmp_path, width):
+    """19 columns (no targets) and 25 (undocumented extras) are UR logs too."""
+    log = lt.read_log(_write(tmp_path / "run.csv", _ur_rows(50, width)))
+    assert log.n_samples == 50 and log.current.shape == (50, 6)
+
+
+def test_corrupted_rows_are_dropped_with_one_warning_that_counts_them(tmp_path):
+    """253.0 rows, 1e300 rows, a row of zeros, time going back, a truncated last line."""
+    table = _ur_rows(300)
+    table[10, 1:4] = 253.0
+    table[20, 5] = 1e300
+    table[30, 1:] = 0.0
+    table[40, 0] = table[39, 0] - 0.5
+    path = _write(tmp_path / "bad.csv", table, ["1236.9,0.1,0.2"])
+    with pytest.warns(LogWarning, match=r"dropped 5 of 301 rows as corrupted \(rows 11, 21, 31"):
+        log = lt.read_log(path)
+    assert log.n_samples == 296 and log.dropped_rows == 5
+    assert np.all(np.diff(log.t) > 0) and np.all(np.abs(log.q - 1.0) < 0.5)
+
+
+def test_a_mostly_garbage_file_is_an_error_naming_it(tmp_path):
+    """More than half the rows corrupted: one error with the file's name, nothing returned."""
+    table = _ur_rows(40)
+    table[::2, 1] = 1e300
+    table[1::4, 2] = np.nan
+    with pytest.raises(LogError, match=r"garbage\.csv"):
+        lt.read_log(_write(tmp_path / "garbage.csv", table))
+
+
+def test_unknown_and_missing_files_fail_in_one_line(tmp_path):
+    """No such file, and a file that is no known log, each name the file."""
+    with pytest.raises(LogError, match="no such file"):
+        lt.read_log(tmp_path / "nothing.csv")
+    (tmp_path / "notes.txt").write_text("hello, world\n")
+    with pytest.raises(LogError, match=r"notes\.txt: unknown log format"):
+        lt.read_log(tmp_path / "notes.txt")
+
+
+def test_panda_text_log_reads_samples_on_consecutive_lines(tmp_path):
+    """Each sample on n consecutive lines; irregular time stamps kept as logged."""
+    t = np.array([0.0, 1.0, 2.0, 4.5, 5.5, 6.5, 7.5, 9.0, 10.0, 11.0]) * 1e-3
+    q = np.linspace(0, 0.1, 70).reshape(10, 7)
+    for kind, values in (("time", t), ("positions", q), ("velocity", q * 0.1),
+                         ("torques", q * 10)):  # fmt: skip
+        (tmp_path / f"exciting_traj_{kind}.txt").write_text("\n".join(map(str, values.ravel())))
+    log = lt.read_log(tmp_path / "exciting_traj_time.txt")
+    assert detect_format(tmp_path) == "panda_txt"
+    np.testing.assert_allclose(log.t, t)
+    np.testing.assert_allclose(log.tau, q * 10)
+    assert log.n_joints == 7
+
+
+def test_excitation_logs_read_as_one_log(tmp_path):
+    """The project's excitation logs (npz) are read back unchanged."""
+    from leadthrough.friction.logs import save_logs
+
+    run = {"t": np.arange(5) * 0.004, "q": np.ones((5, 3)), "qd": np.zeros((5, 3)),
+           "tau": np.full((5, 3), 0.5)}  # fmt: skip
+    log = lt.read_log(save_logs([run], tmp_path / "logs.npz"))
+    np.testing.assert_allclose(log.tau, run["tau"])
+
+
+@needs_realdata
+def test_every_real_ur10e_log_reads_and_the_corrupted_one_says_so():
+    """All UR10e runs read; the known corrupted identification run drops its bad rows."""
+    robot = lt.robots.ur10e()
+    with pytest.warns(LogWarning, match="ur-19_09_27-11_32_02.csv: dropped"):
+        log = lt.read_log(REALDATA / "ur10e/identification/ur-19_09_27-11_32_02.csv", robot)
+    assert 0 < log.dropped_rows < 50 and np.all(np.abs(log.q) < 2 * np.pi)
+    for path in sorted((REALDATA / "ur10e").glob("*/*.csv")):
+        log = lt.read_log(path, robot)
+        assert log.tau is not None and np.all(np.diff(log.t) > 0), path.name
+        assert 0.008 < log.median_period < 0.013, path.name
+
+
+@needs_realdata
+def test_the_panda_run_reads_at_about_one_kilohertz():
+    """20,544 samples of 7 joints, median period 1 ms, torques from the sensors."""
+    log = lt.read_log(REALDATA / "panda_gaz2019")
+    assert log.n_samples == 20544 and log.n_joints == 7
+    assert log.median_period == pytest.approx(1e-3, rel=0.05)
