@@ -1,0 +1,146 @@
+"""Checks of every sensor sample and command: shape, finite, in range, not frozen (SPEC §7).
+
+Each check returns the one-line reason a reading is bad (joints numbered from 1 at the
+base), or None. A good sample costs one vectorised comparison (:func:`in_range`); the
+reasons are only spelled out for a bad one.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from leadthrough.model.description import FloatArray
+from leadthrough.safety.limits import SafetyLimits
+
+
+def floats(value: object) -> FloatArray:
+    """A fresh float array of ``value`` (the caller may reuse its buffer)."""
+    return np.array(value, dtype=float)
+
+
+def in_range(readings: tuple[FloatArray, ...], low: FloatArray, high: FloatArray, n: int) -> bool:
+    """Whether every reading has shape (n,) and lies within [low, high] (NaN does not).
+
+    Args:
+        readings: Vectors in their units, each expected of shape (n,).
+        low: Their lower bounds, concatenated in the same order, shape (k n,) with k at
+            least the number of readings.
+        high: Their upper bounds, likewise.
+        n: Number of joints.
+    """
+    shape = (n,)
+    for reading in readings:
+        if reading.shape != shape:
+            return False
+    values = np.concatenate(readings)
+    size = values.size
+    return bool(((values >= low[:size]) & (values <= high[:size])).all())
+
+
+def sample_reason(
+    limits: SafetyLimits, q: FloatArray, qd: FloatArray, tau: FloatArray | None
+) -> str | None:
+    """The first problem of a sample, reading by reading and joint by joint, or None.
+
+    Args:
+        limits: The supervisor's bounds.
+        q: Joint readings [rad].
+        qd: Joint velocities [rad/s].
+        tau: Measured joint torques [Nm], or None when the robot has none.
+    """
+    speed, torque = limits.qd_bound, limits.tau_bound
+    return (
+        reading_problem("position", q, limits.q_low, limits.q_high, "rad")
+        or reading_problem("velocity", qd, -speed, speed, "rad/s")
+        or (None if tau is None else reading_problem("torque", tau, -torque, torque, "Nm"))
+    )
+
+
+def reading_problem(
+    kind: str, value: FloatArray, low: FloatArray, high: FloatArray, unit: str
+) -> str | None:
+    """Why one reading vector is invalid (shape, non-finite, outside [low, high]), or None."""
+    if value.shape != low.shape:
+        return f"{kind} reading has shape {value.shape}, expected {low.shape}"
+    if np.all((value >= low) & (value <= high)):  # the usual case, one test (NaN fails it)
+        return None
+    bad = np.flatnonzero(~np.isfinite(value))
+    if bad.size:
+        return f"joint {bad[0] + 1} {kind} reading {value[bad[0]]}"
+    bad = np.flatnonzero((value < low) | (value > high))
+    if bad.size:
+        i = bad[0]
+        return (
+            f"joint {i + 1} {kind} reading {value[i]:.4g} {unit} "
+            f"outside [{low[i]:.4g}, {high[i]:.4g}] {unit}"
+        )
+    return None
+
+
+def command_problem(tau: FloatArray, n: int) -> str | None:
+    """Why a controller's torque command is unusable (shape, non-finite), or None."""
+    if tau.shape != (n,):
+        return f"command has shape {tau.shape}, expected ({n},)"
+    bad = np.flatnonzero(~np.isfinite(tau))
+    return f"non-finite command on joint {bad[0] + 1}" if bad.size else None
+
+
+class FrozenEncoders:
+    """Counts bit-identical (q, q̇) samples per joint: a frozen encoder repeats itself.
+
+    Args:
+        n: Number of joints.
+        periods: A joint is frozen after this many identical samples (0: never).
+    """
+
+    def __init__(self, n: int, periods: int) -> None:
+        self.n = n
+        self.periods = periods
+        self.clear()
+
+    def clear(self) -> None:
+        """Forget the samples seen so far (the counters restart)."""
+        self._previous_bits: NDArray[np.uint64] | None = None
+        self._runs = np.zeros(self.n, dtype=int)
+
+    def update(self, q: FloatArray, qd: FloatArray) -> str | None:
+        """Count one sample (q [rad], q̇ [rad/s], shape (n,)); a frozen encoder's reason, or None."""
+        n = self.n
+        bits = np.concatenate((q, qd)).view(np.uint64)
+        if self._previous_bits is None:
+            self._runs = np.ones(n, dtype=int)
+        else:
+            same = bits == self._previous_bits
+            self._runs = self._runs * (same[:n] & same[n:]) + 1  # a changed joint restarts at 1
+        self._previous_bits = bits
+        frozen = self.frozen()
+        if not frozen.any():
+            return None
+        i = np.flatnonzero(frozen)[0]
+        return f"joint {i + 1} encoder frozen: q and qd identical for {self._runs[i]} samples"
+
+    def frozen(self) -> NDArray[np.bool_]:
+        """Joints whose encoder is frozen: ``periods`` identical samples (0: none)."""
+        if self.periods == 0:
+            return np.zeros(self.n, dtype=bool)
+        return self._runs >= self.periods
+
+
+def trusted_velocity(qd: object, bound: FloatArray, frozen: NDArray[np.bool_]) -> FloatArray:
+    """The velocity reading [rad/s], zero where non-finite, out of range or frozen.
+
+    Args:
+        qd: The velocity reading, anything (a bad one gives zeros).
+        bound: Readings beyond ± this are not trusted [rad/s], shape (n,).
+        frozen: Joints whose encoder is frozen, shape (n,).
+    """
+    zeros = np.zeros(bound.shape)
+    try:
+        values = floats(qd)
+    except (TypeError, ValueError):
+        return zeros
+    if values.shape != bound.shape:
+        return zeros
+    trusted = np.isfinite(values) & (np.abs(values) <= bound) & ~frozen
+    return np.where(trusted, values, 0.0)
