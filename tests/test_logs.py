@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from leadthrough.logs import LogError, LogWarning, detect_format
+from leadthrough.runtime.readers import LogError, LogWarning, detect_format
 from realdata import REALDATA, needs_realdata
 
 

@@ -19,7 +19,7 @@ from leadthrough.errors import (
 from leadthrough.estimation.observer import MomentumObserver, ObserverParameters
 from leadthrough.friction.identification import FitReport, identify_friction
 from leadthrough.friction.model import FrictionModel
-from leadthrough.logs import JointLog, read_log
+from leadthrough.logs import JointLog
 from leadthrough.model import robots
 from leadthrough.model.description import (
     DHParameters,
@@ -32,6 +32,7 @@ from leadthrough.model.description import (
 )
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.runtime.loop import LoopReport, control_loop
+from leadthrough.runtime.readers import read_log
 
 __version__ = "0.1.0"
 

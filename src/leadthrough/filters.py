@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.signal import lfilter
 
-from leadthrough.model.description import FloatArray
+from leadthrough.validation import FloatArray
 
 #: Pole of H(z); the gain is 1 − POLE so that H(1) = 1.
 POLE = 0.6

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from leadthrough.model.description import FloatArray
+from leadthrough.validation import FloatArray
 
 
 def minimum_jerk_phase(t: ArrayLike, duration: float) -> tuple[FloatArray, FloatArray]:

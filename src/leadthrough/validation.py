@@ -16,6 +16,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from leadthrough.errors import RobotDescriptionError
 
+#: A float64 array: the type of every numeric result of leadthrough.
+FloatArray = NDArray[np.float64]
+
 
 @contextmanager
 def within(prefix: str, source: str | None = None) -> Iterator[None]:

@@ -13,11 +13,10 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from leadthrough import validation as check
-
-FloatArray = NDArray[np.float64]
+from leadthrough.validation import FloatArray
 
 
 def rpy_to_rotation(rpy: ArrayLike) -> FloatArray:

@@ -25,6 +25,7 @@ import tomllib
 from contextlib import suppress
 from dataclasses import dataclass
 from datetime import UTC, datetime
+from importlib.metadata import version
 from pathlib import Path
 from typing import Any, NamedTuple, Self
 
@@ -333,13 +334,11 @@ def _frozen(rows: list[Any], shape: tuple[int, ...]) -> FloatArray:
 
 
 def _session_metadata(robot: RobotDescription, parameters: dict[str, Any]) -> dict[str, str]:
-    import leadthrough  # at call time: this module may be imported by the package itself
-
     return {
         "format": FORMAT,
         "robot": tomli_w.dumps(robot_to_dict(robot)),
         "parameters": json.dumps(parameters, default=_jsonable),
-        "version": leadthrough.__version__,
+        "version": version("leadthrough"),  # the package root is above the core
         "start_time": datetime.now(UTC).isoformat(timespec="milliseconds"),
     }
 
