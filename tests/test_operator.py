@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from leadthrough.errors import InputShapeError, OperatorError
+from leadthrough.errors import InputShapeError
+from leadthrough.twin.errors import OperatorError
 from leadthrough.twin.operator import (
     Hand,
     HandParameters,

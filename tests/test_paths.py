@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from leadthrough.errors import OperatorError
+from leadthrough.twin.errors import OperatorError
 from leadthrough.twin.paths import Circle, JointMinimumJerk, Line, MinimumJerk, minimum_jerk_phase
 
 RNG_SEED = 20240611

@@ -8,9 +8,9 @@ import pytest
 
 import leadthrough as lt
 from leadthrough.control.feedforward import GravityCompensation
-from leadthrough.runtime.interface import MockRobot
 from leadthrough.twin.friction import TwinFrictionParameters
 from leadthrough.twin.mjcf import Payload
+from leadthrough.twin.mock import MockRobot
 from leadthrough.twin.model_error import ModelError
 from leadthrough.twin.operator import Operator, TorqueProfile, ramp
 from leadthrough.twin.runner import simulate

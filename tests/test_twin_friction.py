@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from leadthrough.errors import FrictionParameterError, InputShapeError
+from leadthrough.errors import InputShapeError
+from leadthrough.twin.errors import FrictionParameterError
 from leadthrough.twin.friction import (
     LuGreFriction,
     TwinFrictionParameters,

@@ -49,14 +49,6 @@ class ParameterError(LeadthroughError, ValueError):
         super().__init__(f"{parameter}: {reason}")
 
 
-class OperatorError(ParameterError):
-    """A parameter of the simulated operator (path, hand, torque profile) is invalid."""
-
-
-class FrictionParameterError(ParameterError):
-    """A friction parameter is invalid (twin friction physics or its defaults)."""
-
-
 class RecordingError(LeadthroughError):
     """A session recording cannot be written or read.
 

@@ -6,7 +6,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from leadthrough import validation
-from leadthrough.errors import InputShapeError, OperatorError
+from leadthrough.errors import InputShapeError
+from leadthrough.twin.errors import OperatorError
 
 FloatArray = NDArray[np.float64]
 

@@ -61,9 +61,10 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from leadthrough.errors import FrictionParameterError, InputShapeError
+from leadthrough.errors import InputShapeError
 from leadthrough.model.description import RobotDescription
 from leadthrough.model.dynamics import Dynamics
+from leadthrough.twin.errors import FrictionParameterError
 from leadthrough.validation import real
 
 FloatArray = NDArray[np.float64]

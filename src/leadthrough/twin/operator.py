@@ -24,8 +24,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from leadthrough.errors import OperatorError
 from leadthrough.twin import _checks as check
+from leadthrough.twin.errors import OperatorError
 from leadthrough.twin.paths import JointMinimumJerk, Path
 
 FloatArray = NDArray[np.float64]

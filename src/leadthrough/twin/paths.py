@@ -17,9 +17,9 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from leadthrough.errors import OperatorError
 from leadthrough.trajectories import minimum_jerk_phase
 from leadthrough.twin import _checks as check
+from leadthrough.twin.errors import OperatorError
 
 FloatArray = NDArray[np.float64]
 
