@@ -17,7 +17,7 @@ import leadthrough as lt
 from leadthrough.control.admittance import dead_zone
 from leadthrough.experiments.friction_study import run_friction_study
 from leadthrough.experiments.lead_through import PATHS, guided_run
-from leadthrough.experiments.observer import REALISTIC_TWIN
+from leadthrough.twin.presets import REALISTIC_TWIN
 from leadthrough.twin.simulator import DigitalTwin
 
 

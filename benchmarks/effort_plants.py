@@ -16,7 +16,7 @@ from dataclasses import replace
 import leadthrough as lt
 from leadthrough.experiments.friction_study import run_friction_study
 from leadthrough.experiments.lead_through import PATHS, PLANTS, guided_run
-from leadthrough.experiments.observer import REALISTIC_TWIN
+from leadthrough.twin.presets import REALISTIC_TWIN
 
 
 def main() -> None:

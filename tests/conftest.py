@@ -21,7 +21,7 @@ def identified_friction():
     """Friction identified on the realistic twin (masses ±5 %), as a user does first."""
     import leadthrough as lt
     from leadthrough.experiments.friction_study import run_friction_study
-    from leadthrough.experiments.observer import REALISTIC_TWIN
+    from leadthrough.twin.presets import REALISTIC_TWIN
 
     return run_friction_study(lt.robots.yumi(), twin_config=REALISTIC_TWIN).model
 

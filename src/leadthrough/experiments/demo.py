@@ -18,12 +18,12 @@ import numpy as np
 
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.experiments.friction_study import run_friction_study
-from leadthrough.experiments.observer import REALISTIC_TWIN
 from leadthrough.experiments.teach import RecordingController, replay_recording
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.runtime.recording import SessionRecorder, read_recording
+from leadthrough.twin.presets import REALISTIC_TWIN
 from leadthrough.twin.runner import SimulationResult, simulate
 from leadthrough.twin.session_operator import Action, ScriptedOperator, TeachingSession
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig

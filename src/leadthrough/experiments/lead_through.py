@@ -18,7 +18,6 @@ from leadthrough.control.calibration import Calibration, CalibrationParameters
 from leadthrough.control.feedforward import GravityCompensation
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.control.parameters import LeadThroughParameters
-from leadthrough.experiments.observer import REALISTIC_TWIN
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
@@ -27,6 +26,7 @@ from leadthrough.twin.mjcf import Payload
 from leadthrough.twin.model_error import ModelError
 from leadthrough.twin.operator import During, JointHand, Operator
 from leadthrough.twin.paths import JointMinimumJerk
+from leadthrough.twin.presets import REALISTIC_TWIN
 from leadthrough.twin.runner import SimulationResult, simulate
 from leadthrough.twin.scenarios import scenario
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig

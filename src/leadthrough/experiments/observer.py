@@ -19,15 +19,11 @@ from leadthrough.estimation.observer import MomentumObserver
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
-from leadthrough.twin.model_error import ModelError
 from leadthrough.twin.operator import JointHand, Operator, TorqueProfile, ramp, step
 from leadthrough.twin.paths import JointMinimumJerk
+from leadthrough.twin.presets import REALISTIC_TWIN
 from leadthrough.twin.runner import SimulationResult, simulate
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig
-
-#: The twin of the acceptance tests: masses ±5 %, COMs ±5 mm (friction unchanged: the
-#: observer uses friction identified on this same twin).
-REALISTIC_TWIN = TwinConfig(model_error=ModelError(mass_error=0.05, com_error=0.005), seed=1)
 
 ObserverFactory = Callable[[Dynamics, FrictionModel, float], object]
 
@@ -313,7 +309,6 @@ def identified_without_position(friction: FrictionModel) -> FrictionModel:
 
 __all__ = [
     "OBSERVERS",
-    "REALISTIC_TWIN",
     "BreakawayResult",
     "DitherSweep",
     "ObserverRun",

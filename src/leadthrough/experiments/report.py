@@ -17,7 +17,6 @@ from leadthrough.experiments.lead_through import (
     robustness,
 )
 from leadthrough.experiments.observer import (
-    REALISTIC_TWIN,
     breakaway_with_and_without_dither,
     dither_frequency_sweep,
     identified_without_position,
@@ -30,6 +29,7 @@ from leadthrough.plots import lead_through as lead_through_plots
 from leadthrough.plots import observer as observer_plots
 from leadthrough.plots import pyplot
 from leadthrough.plots.stability import plot_stability_map
+from leadthrough.twin.presets import REALISTIC_TWIN
 
 
 def write_experiments(

@@ -9,12 +9,12 @@ import numpy as np
 
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.control.replay import Replayer, plan_replay, replay_errors
-from leadthrough.experiments.observer import REALISTIC_TWIN
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.runtime.recording import SessionRecorder, read_recording
 from leadthrough.twin.operator import During
+from leadthrough.twin.presets import REALISTIC_TWIN
 from leadthrough.twin.runner import SimulationResult, simulate
 from leadthrough.twin.scenarios import scenario
 from leadthrough.twin.simulator import DigitalTwin

@@ -15,13 +15,10 @@ from leadthrough.errors import LeadthroughError
 from leadthrough.model.description import RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.twin.mjcf import Payload, TableSurface
-from leadthrough.twin.model_error import ModelError
 from leadthrough.twin.operator import Hand, JointHand, Operator, TorqueProfile, step
 from leadthrough.twin.paths import Circle, JointMinimumJerk, Line, MinimumJerk
+from leadthrough.twin.presets import REALISTIC_TWIN
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig
-
-#: Model error the controllers must cope with (SPEC: masses ±5 %, friction ±20 %).
-REALISTIC_ERROR = ModelError(mass_error=0.05, com_error=0.005, friction_scale=1.15)
 
 
 @dataclass(frozen=True)
@@ -101,7 +98,8 @@ def _table_push(robot: RobotDescription, config: TwinConfig) -> Scenario:
 
 
 def _payload(robot: RobotDescription, config: TwinConfig) -> Scenario:
-    error = replace(REALISTIC_ERROR, payload=Payload(0.5))
+    # the realistic plant's model error, with friction +15 % (SPEC: friction ±20 %) and a payload
+    error = replace(REALISTIC_TWIN.model_error, friction_scale=1.15, payload=Payload(0.5))
     return Scenario("payload", "an unmodelled 0.5 kg payload, masses ±5 %, friction +15 %",
                     replace(config, model_error=error), Operator(), robot.home(), 2.0)  # fmt: skip
 
