@@ -7,6 +7,8 @@ lazy import cannot hide an upward dependency.
 from __future__ import annotations
 
 import ast
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -107,3 +109,14 @@ def test_the_checker_sees_lazy_and_relative_imports(monkeypatch):
     fake = PACKAGE / "control" / "fake.py"
     monkeypatch.setattr(Path, "read_text", lambda self, encoding=None: source)
     assert imported(fake) == [("leadthrough.twin.runner", 2), ("leadthrough.cli.main", 3)]
+
+
+def test_import_loads_no_heavy_library():
+    """``import leadthrough`` loads neither scipy, matplotlib, MuJoCo nor numba (kept lazy)."""
+    code = (
+        "import sys, leadthrough\n"
+        "heavy = {'scipy', 'matplotlib', 'mujoco', 'numba'}\n"
+        "print(sorted(heavy & {name.split('.')[0] for name in sys.modules}))"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert run.stdout.strip() == "[]"

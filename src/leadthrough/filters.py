@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.signal import lfilter
 
 from leadthrough.validation import FloatArray
 
@@ -25,6 +24,8 @@ def low_pass(previous: ArrayLike, new: ArrayLike, pole: float = POLE) -> FloatAr
 
 def low_pass_signal(signal: ArrayLike, pole: float = POLE) -> FloatArray:
     """H(z) over a whole signal along its first axis, starting from rest at its first sample."""
+    from scipy.signal import lfilter  # at call time: scipy.signal takes 0.6 s to import
+
     signal = np.asarray(signal, dtype=float)
     if len(signal) == 0:
         return signal.copy()

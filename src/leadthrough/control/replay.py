@@ -14,7 +14,6 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.polynomial import polynomial
 from numpy.typing import ArrayLike
-from scipy.signal import butter, filtfilt
 
 from leadthrough.control.tracking import JointTracker
 from leadthrough.errors import ParameterError, ReplayError
@@ -183,6 +182,8 @@ def _smooth(q: FloatArray, dt: float, smoothing_time: float) -> FloatArray:
     cutoff = 1.0 / (2.0 * np.pi * smoothing_time) if smoothing_time > 0.0 else np.inf
     if cutoff >= 0.45 / dt or len(q) < 4:  # nothing to remove below the Nyquist frequency
         return q.copy()
+    from scipy.signal import butter, filtfilt  # at call time: a slow import
+
     b, a = butter(2, cutoff, fs=1.0 / dt)
     pad = round(6.0 * smoothing_time / dt) + 6
     fit = min(len(q), round(4.0 * smoothing_time / dt) + 4)

@@ -35,7 +35,6 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.linalg import solve_discrete_are
 
 from leadthrough.errors import ParameterError
 from leadthrough.friction.model import FrictionModel
@@ -102,6 +101,8 @@ def stationary_filter(
     model_noise: float, torque_noise: float, noise: float, dt: float
 ) -> tuple[FloatArray, float]:
     """Stationary gain (K₁, K₂) and posterior std of τ_ext of one joint (discrete ARE)."""
+    from scipy.linalg import solve_discrete_are  # at call time: keeps the import fast
+
     transition = np.array([[1.0, dt], [0.0, 1.0]])
     output = np.array([[1.0, 0.0]])
     q11, q12, q22 = (float(v) for v in process_noise(np.array(model_noise), torque_noise, dt))

@@ -27,7 +27,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy import linalg, optimize
 
 from leadthrough.errors import LeadthroughError
 from leadthrough.filters import low_pass_signal
@@ -280,6 +279,8 @@ def _fit_sliding(
     qd: FloatArray, u: FloatArray, tau: FloatArray, with_position: bool
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Linear least squares of ``τ = sign(q̇) (a₀ + a₁ u + a₂ u²) + c q̇``: θ, std(θ), residual."""
+    from scipy import linalg  # at call time: keeps `import leadthrough` fast
+
     sign = np.sign(qd)
     columns = [sign, sign * u, sign * u * u, qd] if with_position else [sign, qd]
     design = np.column_stack(columns)
@@ -317,6 +318,8 @@ def _fit_sigmoids(
         deviation = tau - (level * (upper + lower - 1.0) + viscous * qd)
         variance = (level * (upper - lower)) ** 2 + noise_std**2
         return np.concatenate([deviation, (deviation**2 - variance) / scale])
+
+    from scipy import optimize  # at call time: scipy.optimize takes 0.15 s to import
 
     bounds = (np.log([50.0, 1e-5]), np.log([1e5, 0.05]))
     initial = np.clip(np.log(start), bounds[0] + 1e-9, bounds[1] - 1e-9)

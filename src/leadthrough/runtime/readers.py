@@ -29,7 +29,6 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
-from scipy.ndimage import median_filter
 
 from leadthrough.errors import LeadthroughError
 from leadthrough.logs.log import FloatArray, JointLog
@@ -170,6 +169,8 @@ def _plausible(table: FloatArray, kinds: list[str]) -> np.ndarray:
 
 def _on_path(q: FloatArray, candidates: np.ndarray, window: int = 9) -> np.ndarray:
     """Rows whose joint readings lie within :data:`_OFF_PATH` of the running median."""
+    from scipy.ndimage import median_filter  # at call time: keeps `import leadthrough` fast
+
     ok = candidates & np.all(np.isfinite(q), axis=1) & np.all(np.abs(q) <= _BOUNDS["q"], axis=1)
     result = np.zeros(len(q), dtype=bool)
     index = np.flatnonzero(ok)
