@@ -7,6 +7,7 @@ lazy import cannot hide an upward dependency.
 from __future__ import annotations
 
 import ast
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -120,3 +121,11 @@ def test_import_loads_no_heavy_library():
     )
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert run.stdout.strip() == "[]"
+
+
+def test_importing_the_twin_leaves_the_environment_alone():
+    """Importing the twin (and MuJoCo) sets no MUJOCO_GL: the backend is chosen to render."""
+    env = {key: value for key, value in os.environ.items() if key != "MUJOCO_GL"}
+    code = "import os, leadthrough.twin.simulator\nprint(os.environ.get('MUJOCO_GL'))"
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert run.stdout.strip() == "None", run.stderr

@@ -234,6 +234,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; errors of leadthrough print as one line and exit 2."""
+    from leadthrough.twin.render import prefer_offscreen_gl
+
+    prefer_offscreen_gl()  # the commands that draw the arm render offscreen
     args = build_parser().parse_args(argv)
     try:
         return args.run(args)

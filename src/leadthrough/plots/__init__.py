@@ -2,13 +2,26 @@
 
 
 def pyplot():
-    """matplotlib.pyplot on the non-interactive Agg backend (no screen needed)."""
+    """matplotlib.pyplot; on Agg (files only, no screen needed) unless a backend was chosen.
+
+    A backend chosen by the user (a notebook's, ``MPLBACKEND``, ``matplotlib.use``, a
+    matplotlibrc) is kept: only where matplotlib would pick one itself is Agg selected.
+    """
     import matplotlib
 
-    matplotlib.use("Agg")
+    if not _backend_chosen(matplotlib):
+        matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     return plt
+
+
+def _backend_chosen(matplotlib) -> bool:
+    """Whether matplotlib's backend was chosen already (without making it choose one)."""
+    try:
+        return matplotlib.get_backend(auto_select=False) is not None  # matplotlib ≥ 3.10
+    except TypeError:
+        return matplotlib.rcParams._get_backend_or_none() is not None
 
 
 def label_torque_and_velocity(top, bottom) -> None:

@@ -1,7 +1,5 @@
-"""The digital twin: a MuJoCo plant of the arm, its interface, friction and operator."""
+"""The digital twin: a MuJoCo plant of the arm, its interface, friction and operator.
 
-import os
-
-# MuJoCo picks its OpenGL backend when it is first imported: offscreen EGL unless the
-# user chose otherwise (a screen is never assumed).
-os.environ.setdefault("MUJOCO_GL", "egl")
+Importing it changes nothing in the process: the OpenGL backend of MuJoCo is chosen where
+rendering starts (:func:`leadthrough.twin.render.prefer_offscreen_gl`).
+"""

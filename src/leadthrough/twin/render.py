@@ -2,7 +2,9 @@
 
 Rendering needs an OpenGL context without a screen: EGL (``MUJOCO_GL=egl``, the
 default here) or OSMesa. Where neither works a :class:`RenderError` says what to
-install.
+install. MuJoCo reads ``MUJOCO_GL`` once, when it is first imported: a program that
+renders calls :func:`prefer_offscreen_gl` before it builds a twin (the command line
+does).
 """
 
 from __future__ import annotations
@@ -23,6 +25,14 @@ class RenderError(LeadthroughError, RuntimeError):
     """No offscreen OpenGL context is available."""
 
 
+def prefer_offscreen_gl() -> None:
+    """Ask MuJoCo for offscreen EGL, unless the user chose a backend (``MUJOCO_GL`` set).
+
+    Effective only before MuJoCo's first import in the process.
+    """
+    os.environ.setdefault("MUJOCO_GL", "egl")
+
+
 def render_arm(
     model: mujoco.MjModel,
     data: mujoco.MjData,
@@ -34,6 +44,7 @@ def render_arm(
     lookat: tuple[float, float, float] = (0.2, 0.1, 0.1),
 ) -> np.ndarray:
     """An RGB image (height, width, 3) of the arm in its current state."""
+    prefer_offscreen_gl()
     import mujoco
 
     try:
@@ -42,7 +53,8 @@ def render_arm(
         backend = os.environ.get("MUJOCO_GL", "")
         raise RenderError(
             f"no offscreen OpenGL ({backend or 'default'} backend: {error}); install EGL "
-            "(Debian: apt-get install libegl1 libgl1-mesa-dri) or set MUJOCO_GL=osmesa"
+            "(Debian: apt-get install libegl1 libgl1-mesa-dri) or set MUJOCO_GL=osmesa "
+            "before MuJoCo is imported"
         ) from None
     camera = mujoco.MjvCamera()
     camera.distance, camera.azimuth, camera.elevation = distance, azimuth, elevation
