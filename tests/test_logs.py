@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
+from leadthrough.errors import InputShapeError
 from leadthrough.runtime.readers import LogError, LogWarning, detect_format
 from realdata import REALDATA, needs_realdata
 
@@ -123,3 +124,19 @@ def test_the_panda_run_reads_at_about_one_kilohertz():
     log = lt.read_log(REALDATA / "panda_gaz2019")
     assert log.n_samples == 20544 and log.n_joints == 7
     assert log.median_period == pytest.approx(1e-3, rel=0.05)
+
+
+@pytest.mark.parametrize(
+    ("columns", "named"),
+    [
+        ({"t": np.zeros((5, 1))}, "run.csv: t"),
+        ({"q": np.zeros((4, 2))}, "run.csv: q"),
+        ({"qd": np.zeros((5, 3))}, "run.csv: qd"),
+        ({"extra": {"i": np.zeros(4)}}, "run.csv: extra\\['i'\\]"),
+    ],
+)
+def test_a_log_with_disagreeing_shapes_names_the_column(columns, named):
+    """Columns of the wrong shape raise InputShapeError naming the file and the column."""
+    arrays = {"t": np.arange(5.0), "q": np.zeros((5, 2)), "qd": np.zeros((5, 2))} | columns
+    with pytest.raises(InputShapeError, match=f"^{named}: expected shape"):
+        lt.JointLog(**arrays, source="run.csv")

@@ -72,9 +72,10 @@ class Plane(VirtualConstraint):
 
     def force(self, position: FloatArray, velocity: FloatArray) -> FloatArray:
         """Pull back onto the plane."""
-        distance = float(self.normal @ (position - self.point))
-        inward = -np.sign(distance) * self.normal if distance else self.normal
-        damping = -self.damping * float(self.normal @ velocity) * self.normal
+        normal, point = np.asarray(self.normal, dtype=float), np.asarray(self.point, dtype=float)
+        distance = float(normal @ (position - point))
+        inward = -np.sign(distance) * normal if distance else normal
+        damping = -self.damping * float(normal @ velocity) * normal
         return self.stiffness * abs(distance) * inward + damping
 
 
@@ -101,9 +102,10 @@ class Box(VirtualConstraint):
 
     def force(self, position: FloatArray, velocity: FloatArray) -> FloatArray:
         """Push back through each face that is crossed."""
+        lower, upper = np.asarray(self.lower, dtype=float), np.asarray(self.upper, dtype=float)
         total = np.zeros(3)
         for axis, unit in enumerate(np.eye(3)):
-            below, above = self.lower[axis] - position[axis], position[axis] - self.upper[axis]
+            below, above = lower[axis] - position[axis], position[axis] - upper[axis]
             if below > 0:
                 total += self._push(below, unit, velocity)
             if above > 0:
@@ -132,7 +134,7 @@ class KeepOutSphere(VirtualConstraint):
 
     def force(self, position: FloatArray, velocity: FloatArray) -> FloatArray:
         """Push radially outwards while inside."""
-        offset = position - self.center
+        offset = position - np.asarray(self.center, dtype=float)
         distance = float(np.linalg.norm(offset))
         if distance >= self.radius:
             return np.zeros(3)

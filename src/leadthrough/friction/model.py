@@ -26,11 +26,13 @@ the sign of the motion. Everything is vectorised: arrays broadcast as (..., n).
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
+from functools import cached_property
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import tomli_w
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from leadthrough.errors import ParameterError
 from leadthrough.model.description import FloatArray, RobotDescription
@@ -42,6 +44,8 @@ _ERROR = ("relative_error",)
 #: Relative error of the Coulomb levels of a model that does not say (Table 4.1 was tuned by
 #: hand: the project's robustness target, friction off by ±20 %).
 DEFAULT_RELATIVE_ERROR = 0.2
+#: Default of the optional fields: ``__post_init__`` fills in an (n,) array.
+_FILLED_IN: Any = None
 
 
 def sigmoid(x: FloatArray) -> FloatArray:
@@ -73,11 +77,11 @@ class FrictionModel:
     half_width: FloatArray
     viscous: FloatArray
     noise_std: FloatArray
-    position_linear: FloatArray | None = None
-    position_quadratic: FloatArray | None = None
-    position_mid: FloatArray | None = None
-    position_half_range: FloatArray | None = None
-    relative_error: FloatArray | None = None
+    position_linear: FloatArray = _FILLED_IN
+    position_quadratic: FloatArray = _FILLED_IN
+    position_mid: FloatArray = _FILLED_IN
+    position_half_range: FloatArray = _FILLED_IN
+    relative_error: FloatArray = _FILLED_IN
 
     def __post_init__(self) -> None:
         given = {name: getattr(self, name) for name in _PARAMETERS + _POSITION + _ERROR}
@@ -98,9 +102,20 @@ class FrictionModel:
         _require("position_half_range", self.position_half_range > 0.0, "> 0")
         _require("position_linear", _level_stays_positive(self.position_linear,
                  self.position_quadratic), "such that τ_C(q) > 0 over the whole range")  # fmt: skip
-        object.__setattr__(self, "_half_slope", 0.5 * self.slope)
-        object.__setattr__(self, "_half_slope_width", 0.5 * self.slope * self.half_width)
-        object.__setattr__(self, "_position_dependent", self.has_position_dependence)
+
+    @cached_property
+    def _half_slope(self) -> FloatArray:
+        """A / 2 [s/rad], (n,)."""
+        return 0.5 * self.slope
+
+    @cached_property
+    def _half_slope_width(self) -> FloatArray:
+        """A B / 2 [–], (n,)."""
+        return 0.5 * self.slope * self.half_width
+
+    @cached_property
+    def _position_dependent(self) -> bool:
+        return self.has_position_dependence
 
     @property
     def n_joints(self) -> int:
@@ -115,7 +130,7 @@ class FrictionModel:
     @classmethod
     def from_robot(cls, robot: RobotDescription) -> FrictionModel:
         """The friction parameters of a description (thesis Table 4.1 for the YuMi)."""
-        values = {name: [getattr(joint.friction, name) for joint in robot.joints]
+        values = {name: np.array([getattr(joint.friction, name) for joint in robot.joints])
                   for name in _PARAMETERS}  # fmt: skip
         return cls(**values)
 
@@ -200,14 +215,14 @@ class FrictionModel:
                                         error.reason) from None  # fmt: skip
 
 
-def _level_stays_positive(linear: FloatArray, quadratic: FloatArray) -> FloatArray:
+def _level_stays_positive(linear: FloatArray, quadratic: FloatArray) -> NDArray[np.bool_]:
     """Whether 1 + k₁ u + k₂ u² > 0 for all u in [−1, 1], per joint."""
     vertex = np.clip(-linear / np.where(quadratic == 0.0, np.inf, 2.0 * quadratic), -1.0, 1.0)
     candidates = np.stack([-np.ones_like(linear), np.ones_like(linear), vertex])
     return np.all(1.0 + linear * candidates + quadratic * candidates**2 > 0.0, axis=0)
 
 
-def _require(name: str, ok: FloatArray, rule: str) -> None:
+def _require(name: str, ok: NDArray[np.bool_], rule: str) -> None:
     bad = np.flatnonzero(~ok)
     if bad.size:
         raise ParameterError(f"{name}[{bad[0]}]", f"must be {rule}")

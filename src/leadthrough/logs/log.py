@@ -42,25 +42,24 @@ class JointLog:
     dropped_rows: int = 0
 
     def __post_init__(self) -> None:
+        where = self.source or "log"
         t = np.asarray(self.t, dtype=float)
         q = np.atleast_2d(np.asarray(self.q, dtype=float))
-        if t.ndim != 1 or q.shape[0] != t.size:
-            raise InputShapeError(f"{self.source or 'log'}: t {t.shape} and q {q.shape} disagree")
+        if t.ndim != 1:
+            raise InputShapeError(f"{where}: t", (q.shape[0],), t.shape)
+        if q.shape[0] != t.size:
+            raise InputShapeError(f"{where}: q", (t.size, q.shape[1]), q.shape)
         for name in ("qd", "tau", "current"):
             value = getattr(self, name)
             if value is None:
                 continue
             value = np.asarray(value, dtype=float)
             if value.shape != q.shape:
-                raise InputShapeError(
-                    f"{self.source or 'log'}: {name} has shape {value.shape}, q has {q.shape}"
-                )
+                raise InputShapeError(f"{where}: {name}", q.shape, value.shape)
             object.__setattr__(self, name, value)
         for name, value in self.extra.items():
             if len(value) != t.size:
-                raise InputShapeError(
-                    f"{self.source or 'log'}: column {name!r} has {len(value)} rows, t has {t.size}"
-                )
+                raise InputShapeError(f"{where}: extra[{name!r}]", (t.size,), np.shape(value))
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "q", q)
 
