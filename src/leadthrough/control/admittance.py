@@ -24,6 +24,7 @@ moves turns that lag into a negative damping that a stiff hand makes unstable
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -63,7 +64,7 @@ def admittance_step(
     """
     virtual_mass = inertia_scale * mass
     lhs = virtual_mass + dt * np.diag(damping)
-    qd_ref = np.linalg.solve(lhs, virtual_mass @ state.qd_ref + dt * tau_in)
+    qd_ref = cast(FloatArray, np.linalg.solve(lhs, virtual_mass @ state.qd_ref + dt * tau_in))
     return AdmittanceState(state.q_ref + dt * qd_ref, qd_ref)
 
 

@@ -193,7 +193,7 @@ class CalibrationRun:
         moving = max(t - p.settle_time, 0.0)
         offset, velocity, acceleration = triangular_velocity(moving, p.speed, p.frequency)
         if t < p.settle_time:
-            velocity = acceleration = 0.0
+            velocity = acceleration = np.zeros_like(velocity)
         d = self._direction
         q_ref, qd_ref = self.pose + d * offset, d * velocity
         error = np.abs(q_ref - q)

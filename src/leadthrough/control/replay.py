@@ -10,6 +10,7 @@ end; :func:`replay_errors` says how closely a replay followed it.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 from numpy.polynomial import polynomial
@@ -133,7 +134,7 @@ def plan_replay(
     friction = friction or FrictionModel.from_robot(dynamics.robot)
     t, q = _checked_recording(t, q, dynamics.n)
     dt = float(np.median(np.diff(t)))
-    taught_t = np.arange(int(np.floor((t[-1] - t[0]) / dt + 1e-9)) + 1) * dt
+    taught_t = np.arange(int(np.floor((t[-1] - t[0]) / dt + 1e-9)) + 1, dtype=float) * dt
     q_smooth = _smooth(np.column_stack([np.interp(taught_t, t - t[0], x) for x in q.T]), dt,
                        p.smoothing_time)  # fmt: skip
     qd_taught = np.gradient(q_smooth, dt, axis=0)
@@ -195,7 +196,7 @@ def _continued(end: FloatArray, count: int) -> FloatArray:
     """``count`` samples that continue ``end`` (samples, n) along its least-squares cubic."""
     s = np.arange(len(end)) / len(end)
     cubic = polynomial.polyfit(s, end, min(3, len(end) - 1))
-    return polynomial.polyval((len(end) + np.arange(count)) / len(end), cubic).T
+    return cast(FloatArray, polynomial.polyval((len(end) + np.arange(count)) / len(end), cubic).T)
 
 
 def _pauses(slow: np.ndarray, dt: float, pause_time: float) -> tuple[list, list]:

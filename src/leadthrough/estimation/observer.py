@@ -151,7 +151,7 @@ class MomentumObserver:
             np.zeros(n), parameters.torque_noise, self.dt
         )
         self._noise_d = parameters.measurement_noise / self.dt
-        self._previous_drift: FloatArray | None = None
+        self._previous_drift = np.zeros(n)  # read once initialised
         self.reset()
 
     # --- public state ------------------------------------------------------------------
@@ -174,7 +174,6 @@ class MomentumObserver:
         variance = self.parameters.torque_noise  # 1 s of random walk
         self._cov = (np.zeros(n), np.zeros(n), np.full(n, variance))
         self._std = np.full(n, np.sqrt(variance))
-        self._previous_drift = None
 
     # --- the filter --------------------------------------------------------------------
 
@@ -222,6 +221,7 @@ class MomentumObserver:
             self._std = np.where(moving, levels["std_moving"], levels["std_still"])
             return (np.where(moving, levels["k1_moving"], levels["k1_still"]),
                     np.where(moving, levels["k2_moving"], levels["k2_still"]))  # fmt: skip
+        assert friction_std is not None  # computed whenever the gains are not two-level
         return self._covariance_step(self.parameters.friction_noise_scale * friction_std**2)
 
     def _covariance_step(self, model_noise: FloatArray) -> tuple[FloatArray, FloatArray]:

@@ -24,7 +24,7 @@ def save_logs(logs: Sequence, path: str | Path) -> Path:
     path = Path(path)
     arrays = _stack(logs)
     if path.suffix == ".npz":
-        np.savez_compressed(path, **arrays)
+        np.savez_compressed(path, **arrays)  # type: ignore[arg-type]  # numpy's stub: kwds
     elif path.suffix == ".csv":
         n = arrays["q"].shape[1]
         header = ["run", "t"] + [f"{k}{i + 1}" for k in ("q", "qd", "tau") for i in range(n)]

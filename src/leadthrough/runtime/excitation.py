@@ -147,7 +147,7 @@ def _run_wave(
 ) -> ExcitationLog:
     """Follow the triangular velocity on ``joint`` for ``run.cycles`` periods, logging."""
     steps = round(run.cycles / frequency / robot.dt)
-    log: dict[str, list[FloatArray]] = {"t": [], "q": [], "qd": [], "tau": []}
+    log: dict[str, list[float | FloatArray]] = {"t": [], "q": [], "qd": [], "tau": []}
     q_ref, qd_ref, qdd_ref = start.copy(), np.zeros_like(start), np.zeros_like(start)
     state = robot.read_state()
     t0 = state.t

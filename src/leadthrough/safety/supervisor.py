@@ -145,15 +145,16 @@ class SafetySupervisor:
         """
         try:
             self._t = float(t)
-            q, qd = floats(q), floats(qd)
+            position, velocity = floats(q), floats(qd)
             tau = None if tau_measured is None else floats(tau_measured)
-            problem = self._sample_problem(q, qd, tau) or self._encoders.update(q, qd)
+            problem = self._sample_problem(position, velocity, tau)
+            problem = problem or self._encoders.update(position, velocity)
         except Exception as error:  # nothing may escape on the motor path
             problem = f"sensor check failed: {type(error).__name__}: {error}"
         if problem is not None:
             self._fault(problem)
             return False
-        self._q_last_good = q
+        self._q_last_good = position
         return self.state is not SupervisorState.FAULT
 
     def command(self, t: float, q: ArrayLike, qd: ArrayLike, tau_desired: ArrayLike) -> FloatArray:

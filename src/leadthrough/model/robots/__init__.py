@@ -13,6 +13,7 @@ import dataclasses
 import tomllib
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -96,7 +97,7 @@ def with_drive_data(robot: RobotDescription, path: str | Path) -> RobotDescripti
     for i, joint in enumerate(robot.joints):
         changed = {key: float(data[key][i]) for key in friction_keys if key in data}
         friction = JointFriction(**{**joint.friction.__dict__, **changed})
-        drive = {key: float(data[key][i]) for key in drive_keys if key in data}
+        drive: dict[str, Any] = {key: float(data[key][i]) for key in drive_keys if key in data}
         joints.append(dataclasses.replace(joint, friction=friction, **drive))
     home = np.array(data["home"], dtype=float) if "home" in data else robot.home_position
     return dataclasses.replace(robot, joints=tuple(joints), home_position=home)

@@ -30,7 +30,7 @@ Errors name the file and the field: ``yumi.toml: joints[3].link.mass: must be > 
 from __future__ import annotations
 
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Mapping, Set
 from pathlib import Path
 from typing import Any
 
@@ -118,7 +118,7 @@ def robot_to_dict(robot: RobotDescription) -> dict[str, Any]:
 
 
 def _keys(
-    data: object, field: str, required: set[str], optional: set[str] = frozenset()
+    data: object, field: str, required: Set[str], optional: Set[str] = frozenset()
 ) -> Mapping[str, Any]:
     """Check that ``data`` is a table with all ``required`` and no unknown keys."""
     if not isinstance(data, Mapping):
@@ -161,7 +161,7 @@ def _joint(data: object) -> Joint:
 
 
 def _placement(
-    data: object, required: set[str] = frozenset(), optional: set[str] = frozenset()
+    data: object, required: Set[str] = frozenset(), optional: Set[str] = frozenset()
 ) -> Placement:
     """A Placement from ``xyz`` and one of ``rpy`` or a 3×3 ``rotation``."""
     table = _keys(data, "", required, optional | {"xyz", "rpy", "rotation"})
