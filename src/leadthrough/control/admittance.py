@@ -75,7 +75,9 @@ def tracking_torque(
     return kp * (state.q_ref - q) + kd * (state.qd_ref - qd)
 
 
-def dead_zone(value: FloatArray, width: FloatArray, offset: FloatArray | float = 0.0) -> FloatArray:
+def dead_zone(
+    value: FloatArray, width: FloatArray | float, offset: FloatArray | float = 0.0
+) -> FloatArray:
     """What is left of ``value`` outside [min(0, offset) − width, max(0, offset) + width].
 
     With ``offset = 0`` this is ``sign(x) · max(|x| − w, 0)``. A non-zero offset (a learned
