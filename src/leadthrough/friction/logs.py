@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -22,9 +23,9 @@ class LogFileError(LeadthroughError, ValueError):
 def save_logs(logs: Sequence, path: str | Path) -> Path:
     """Write logs (objects or mappings with t, q, qd, tau) to ``.npz`` or ``.csv``."""
     path = Path(path)
-    arrays = _stack(logs)
+    arrays: dict[str, Any] = _stack(logs)  # Any: numpy's stub of savez types its kwds badly
     if path.suffix == ".npz":
-        np.savez_compressed(path, **arrays)  # type: ignore[arg-type]  # numpy's stub: kwds
+        np.savez_compressed(path, **arrays)
     elif path.suffix == ".csv":
         n = arrays["q"].shape[1]
         header = ["run", "t"] + [f"{k}{i + 1}" for k in ("q", "qd", "tau") for i in range(n)]
