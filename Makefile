@@ -31,6 +31,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_step.py
 	$(BIN)/python benchmarks/effort_limits.py
 	$(BIN)/python benchmarks/effort_plants.py
+	$(BIN)/python benchmarks/guiding_quality.py
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

@@ -24,6 +24,7 @@ from numpy.typing import ArrayLike
 from leadthrough.errors import InputShapeError, LeadthroughError
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.runtime.interface import JointState, RobotInterface
+from leadthrough.twin.dry_friction import DryFriction, DryFrictionParameters
 from leadthrough.twin.friction import (
     LuGreFriction,
     TwinFrictionParameters,
@@ -51,7 +52,10 @@ class TwinConfig:
         sensors: Sensor and drive imperfections.
         model_error: How the true robot differs from the description.
         friction: True friction; default derived from the description (Table 4.1 plus
-            stiction, Stribeck, pre-sliding and cable effect).
+            stiction, Stribeck, pre-sliding and cable effect). Its type follows
+            ``friction_physics``.
+        friction_physics: ``"lugre"`` (the twin's LuGre torque, default) or ``"dry"``
+            (MuJoCo's ``frictionloss`` constraint, :mod:`~leadthrough.twin.dry_friction`).
         table: Optional table surface for contact.
         ft_noise_std: Noise of the wrist force/torque sensor, (force [N], moment [Nm]).
         seed: Seed of every random draw of this twin.
@@ -62,7 +66,8 @@ class TwinConfig:
     delay_periods: int = 1
     sensors: SensorModel = field(default_factory=SensorModel)
     model_error: ModelError = field(default_factory=ModelError)
-    friction: TwinFrictionParameters | None = None
+    friction: TwinFrictionParameters | DryFrictionParameters | None = None
+    friction_physics: str = "lugre"
     table: TableSurface | None = None
     ft_noise_std: tuple[float, float] = (0.02, 0.0005)
     seed: int = 0
@@ -74,6 +79,16 @@ class TwinConfig:
         if abs(ratio - round(ratio)) > 1e-9:
             raise TwinError(f"control_dt {self.control_dt} is not a multiple of physics_dt")
         real("delay_periods", self.delay_periods, minimum=0.0)
+        expected = {"lugre": TwinFrictionParameters, "dry": DryFrictionParameters}
+        if self.friction_physics not in expected:
+            raise TwinError(
+                f"friction_physics must be 'lugre' or 'dry', got {self.friction_physics!r}"
+            )
+        if self.friction is not None and not isinstance(
+            self.friction, expected[self.friction_physics]
+        ):
+            kind = type(self.friction).__name__
+            raise TwinError(f"friction is {kind}, not the parameters of {self.friction_physics!r}")
 
     @property
     def substeps(self) -> int:
@@ -135,9 +150,9 @@ class DigitalTwin(RobotInterface):
         self.true_robot = perturbed_robot(robot, self.config.model_error, rng)
         self.model, self.data = self._build_physics()
         self._sensor_rng = np.random.default_rng(rng.integers(2**63))
-        self.sensors = Sensors(robot, self.config.sensors, self._sensor_rng)
+        self.sensors = Sensors(robot, self.config.sensors, self._sensor_rng, self.config.control_dt)
         self.drives = Drives(self.true_robot, self.config.sensors)
-        self.friction = LuGreFriction(self._friction_parameters(), self.config.physics_dt)
+        self.friction = self._friction_physics()
         self._qpos, self._qvel = self.data.qpos, self.data.qvel  # views, valid for data's life
         self._joint_torque = np.zeros(self.n_joints)
         self._ft_noise = np.repeat(self.config.ft_noise_std, 3)
@@ -163,8 +178,20 @@ class DigitalTwin(RobotInterface):
             raise TwinError(f"MuJoCo rejected the generated model: {error}") from None
         return model, mujoco.MjData(model)
 
+    def _friction_physics(self) -> LuGreFriction | DryFriction:
+        config = self.config
+        if config.friction_physics == "dry":
+            params = config.friction
+            if params is None:
+                scale = config.model_error.friction_scale
+                params = DryFrictionParameters.from_robot(self.true_robot, scale=scale)
+            assert isinstance(params, DryFrictionParameters)
+            return DryFriction(params, self.model, self.data)
+        return LuGreFriction(self._friction_parameters(), config.physics_dt)
+
     def _friction_parameters(self) -> TwinFrictionParameters:
         if self.config.friction is not None:
+            assert isinstance(self.config.friction, TwinFrictionParameters)
             return self.config.friction
         return TwinFrictionParameters.from_robot(
             self.true_robot,
@@ -194,6 +221,7 @@ class DigitalTwin(RobotInterface):
         self.data.qpos[:] = q0
         mujoco.mj_forward(self.model, self.data)
         self.friction.reset()
+        self.sensors.reset()
         holding = self.data.qfrc_bias.copy()
         self._pending = deque([holding] * max(self.config.delay_periods, 1))
         self._tau_motor = holding.copy()
@@ -205,7 +233,7 @@ class DigitalTwin(RobotInterface):
         return JointState(
             t=self.time,
             q=self.sensors.joint_position(self.data.qpos),
-            qd=self.sensors.joint_velocity(self.data.qvel),
+            qd=self.sensors.joint_velocity(self.data.qvel, self.data.qpos),
             tau_measured=self.sensors.motor_torque(self._tau_motor),
         )
 
@@ -241,11 +269,16 @@ class DigitalTwin(RobotInterface):
         for _ in range(self.config.substeps):
             friction_step()  # qfrc_applied = motor + operator + friction
             physics_step(model, data)
-        applied = data.qfrc_applied
         if not np.isfinite(self._qpos.sum()):
             raise TwinError(f"the simulation diverged at t = {self.time:.3f} s")
         self.time += self.config.control_dt
-        self.truth = self._sample_truth(tau_operator, wrench, applied - self._joint_torque)
+        if isinstance(self.friction, DryFriction):
+            friction = self.friction.torque()
+            constraint = data.qfrc_constraint - (friction + model.dof_damping * self._qvel)
+        else:
+            friction = data.qfrc_applied - self._joint_torque
+            constraint = data.qfrc_constraint
+        self.truth = self._sample_truth(tau_operator, wrench, friction, constraint)
 
     def _flange_pose(self) -> FloatArray:
         pose = np.eye(4)
@@ -266,8 +299,13 @@ class DigitalTwin(RobotInterface):
         return tau, wrench
 
     def _sample_truth(
-        self, tau_operator: FloatArray, wrench: FloatArray, friction: FloatArray
+        self,
+        tau_operator: FloatArray,
+        wrench: FloatArray,
+        friction: FloatArray,
+        constraint: FloatArray | None = None,
     ) -> Truth:
+        """The truth now; ``constraint`` is the contact and end-stop torque [Nm]."""
         data = self.data
         pose = self._flange_pose()
         external = wrench + self._tool_contact_wrench(pose[:3, 3]) if data.ncon else wrench
@@ -277,7 +315,7 @@ class DigitalTwin(RobotInterface):
         return Truth(
             q=data.qpos.copy(),
             qd=data.qvel.copy(),
-            tau_ext=tau_operator + data.qfrc_constraint,
+            tau_ext=tau_operator + (data.qfrc_constraint if constraint is None else constraint),
             tau_operator=tau_operator.copy(),
             operator_wrench=wrench.copy(),
             ft_wrench=ft,

@@ -1,0 +1,271 @@
+"""Guiding quality on a family of plants and hands: one case, run through the public API.
+
+A *case* is a sampled plant (:func:`~leadthrough.twin.plants.sample_plant`), a hand
+(relaxed 300 N/m, 30 N s/m or stiff 3000 N/m, 100 N s/m) and a path from the home pose
+(20 cm lines sideways, upwards and downwards-inwards, minimum jerk in 4 s, or a circle).
+:func:`run_case` runs it with one controller twice: the hand follows the path then
+holds the end pose (effort, vibration, peak speed, residual force, observer figures),
+and the hand lets go at 3/4 of the path, while the tool moves (stop time, drift).
+
+The controller is built as a user would: ``lt.LeadThrough(robot, mode=..., dt=0.004)``
+with the nominal description and friction, the start-up calibration included; the hand
+grabs once it is over. ``controller_factory(robot, mode)`` replaces it (any object with
+``step(q, qd, tau_measured)``; ``calibration_time``, ``tau_ext_hat`` and ``std`` are read
+when present), to compare control laws on the same cases.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from leadthrough.control.calibration import CalibrationParameters
+from leadthrough.control.lead_through import LeadThrough
+from leadthrough.model.description import FloatArray, RobotDescription
+from leadthrough.model.dynamics import Dynamics
+from leadthrough.twin.operator import During, Hand
+from leadthrough.twin.paths import Circle, Line, Path
+from leadthrough.twin.plants import sample_plant
+from leadthrough.twin.runner import SimulationResult, simulate
+from leadthrough.twin.simulator import DigitalTwin
+
+#: Hand impedances: (stiffness [N/m], damping [N s/m]).
+HANDS = {"relaxed": (300.0, 30.0), "stiff": (3000.0, 100.0)}
+#: Line displacements from the home flange position [m, world].
+LINES = {
+    "sideways": (0.0, 0.2, 0.0),
+    "upwards": (0.0, 0.0, 0.2),
+    # downwards and towards the body (x−): at the YuMi's home pose the flange is 0.4 m out,
+    # and 14 cm further forward (x+) leaves the reach (the hand saturates at 60 N)
+    "down-in": (-0.2 / np.sqrt(2.0), 0.0, -0.2 / np.sqrt(2.0)),
+}
+PATH_NAMES = (*LINES, "circle")
+LINE_DURATION = 4.0  # [s]
+CIRCLE_DURATION = 6.0  # [s]
+HOLD = 2.0  # [s] of holding the end pose after the path
+REST = 10.0  # [s] after the release (plus 0.5 s to stop)
+VIBRATION_CUTOFF = 4.0  # [Hz]
+MOVING_SPEED = 0.01  # [rad/s] a joint slower than this has stopped
+
+ControllerFactory = Callable[[RobotDescription, str], Any]
+
+
+@dataclass(frozen=True)
+class Case:
+    """One guiding case.
+
+    Attributes:
+        physics: Friction physics of the plant, ``"lugre"`` or ``"dry"``.
+        seed: Plant seed.
+        hand: ``"relaxed"`` or ``"stiff"``.
+        path: One of :data:`PATH_NAMES`.
+    """
+
+    physics: str
+    seed: int
+    hand: str
+    path: str
+
+    @property
+    def name(self) -> str:
+        """Short label, e.g. ``dry#1 stiff sideways``."""
+        return f"{self.physics}#{self.seed} {self.hand} {self.path}"
+
+
+@dataclass(frozen=True)
+class CaseResult:
+    """Figures of one case with one controller (t = 0 at the grab).
+
+    Attributes:
+        case: The case.
+        mode: Controller label.
+        rms_force: RMS hand force while the path moves [N].
+        vibration: RMS of the tool velocity above :data:`VIBRATION_CUTOFF` [m/s].
+        peak_speed: Largest tool speed [m/s].
+        path_peak_speed: Largest speed of the hand's path [m/s].
+        residual_force: Mean hand force over the hold, from 0.5 s after the path ends [N].
+        stop_time: From the release until every joint is slower than 0.01 rad/s for good [s].
+        drift: Largest joint motion over the :data:`REST` s from 0.5 s after the release [rad].
+        max_joint_speed: Largest true joint speed of both runs (a runaway check) [rad/s].
+        observer_rms: RMS error of τ̂_ext vs the operator torque while moving, over the
+            joint's peak operator torque, mean over joints [–] (NaN if not readable).
+        observer_coverage: Share of moving samples within ±2 std [–].
+        observer_std: Median std over the joint's peak operator torque, mean over joints [–].
+    """
+
+    case: Case
+    mode: str
+    rms_force: float
+    vibration: float
+    peak_speed: float
+    path_peak_speed: float
+    residual_force: float
+    stop_time: float
+    drift: float
+    max_joint_speed: float
+    observer_rms: float
+    observer_coverage: float
+    observer_std: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary."""
+        return asdict(self)
+
+
+def cases(kind: str = "full") -> list[Case]:
+    """The benchmark's cases: ``"full"`` (56) or ``"quick"`` (4)."""
+    if kind == "quick":
+        return [Case("dry", 1, "stiff", "sideways"), Case("dry", 2, "relaxed", "upwards"),
+                Case("lugre", 1, "stiff", "down-in"),
+                Case("lugre", 2, "relaxed", "circle")]  # fmt: skip
+    full = []
+    for physics in ("dry", "lugre"):
+        for seed in (1, 2, 3, 4):
+            full += [Case(physics, seed, hand, path) for hand in HANDS for path in LINES]
+            full.append(Case(physics, seed, "relaxed", "circle"))
+    return full
+
+
+def case_path(robot: RobotDescription, name: str) -> Path:
+    """The hand's path ``name`` from the flange position at the home pose."""
+    start = Dynamics(robot).pose(robot.home())[:3, 3]
+    if name == "circle":
+        return Circle(start + np.array([0.0, 0.08, 0.0]), 0.08, (0.0, 0.0, 1.0),
+                      (0.0, -1.0, 0.0), duration=CIRCLE_DURATION)  # fmt: skip
+    return Line(start, start + np.array(LINES[name]), duration=LINE_DURATION)
+
+
+def default_factory(robot: RobotDescription, mode: str) -> LeadThrough:
+    """What a user writes: ``LeadThrough(robot, mode=mode, dt=0.004)``, all defaults."""
+    return LeadThrough(robot, mode=mode, dt=0.004)  # type: ignore[arg-type]
+
+
+class _Recorder:
+    """Steps a controller and keeps its τ̂_ext and std when it has them."""
+
+    def __init__(self, controller: Any) -> None:
+        self.controller = controller
+        self.estimate: list[FloatArray] = []
+        self.std: list[FloatArray] = []
+
+    def step(self, q: FloatArray, qd: FloatArray, tau_measured: FloatArray) -> FloatArray:
+        command = self.controller.step(q, qd, tau_measured)
+        estimate = getattr(self.controller, "tau_ext_hat", None)
+        std = getattr(self.controller, "std", None)
+        self.estimate.append(np.full(len(q), np.nan) if estimate is None else np.array(estimate))
+        self.std.append(np.full(len(q), np.nan) if std is None else np.array(std))
+        return command
+
+
+def _run(
+    robot: RobotDescription,
+    case: Case,
+    mode: str,
+    factory: ControllerFactory,
+    release: float,
+    duration: float,
+) -> tuple[SimulationResult, _Recorder]:
+    """One run from the grab on (t = 0 at the grab) and what the controller estimated."""
+    plant = sample_plant(robot, case.seed, case.physics)
+    stiffness, damping = HANDS[case.hand]
+    hand = Hand(case_path(robot, case.path), stiffness=stiffness, damping=damping)
+    recorder = _Recorder(factory(robot, mode))
+    grab = float(getattr(recorder.controller, "calibration_time", CalibrationParameters().duration))
+    twin = DigitalTwin(robot, plant.config, During(hand, grab, grab + release))
+    whole = simulate(twin, recorder, grab + duration, progress=False)
+    first = len(whole.t) - len(whole.after(grab).t)
+    recorder.estimate, recorder.std = recorder.estimate[first:], recorder.std[first:]
+    return whole.after(grab), recorder
+
+
+def run_case(
+    case: Case,
+    mode: str,
+    controller_factory: ControllerFactory | None = None,
+    robot: RobotDescription | None = None,
+) -> CaseResult:
+    """Run ``case`` with the controller of ``mode`` (or ``controller_factory(robot, mode)``).
+
+    Args:
+        case: The case.
+        mode: ``"passive"`` or ``"active"`` (a label when a factory is given).
+        controller_factory: Builds the controller; default :func:`default_factory`.
+        robot: The nominal description (default the YuMi).
+
+    Returns:
+        The figures of both runs (hold and release).
+    """
+    if robot is None:
+        from leadthrough.model import robots
+
+        robot = robots.yumi()
+    factory = controller_factory or default_factory
+    path = case_path(robot, case.path)
+    held, recorder = _run(robot, case, mode, factory, np.inf, path.duration + HOLD)
+    release_at = 0.75 * path.duration
+    let_go, _ = _run(robot, case, mode, factory, release_at, release_at + 0.5 + REST)
+    dt = float(held.t[1] - held.t[0])
+    velocity = np.gradient(held.flange_position, dt, axis=0)
+    moving = held.t <= path.duration
+    holding = held.t >= path.duration + 0.5
+    speeds = np.linalg.norm(path.velocity(held.t), axis=1)
+    stop_time, drift = _release_figures(let_go, release_at)
+    observer = _observer_figures(held, recorder, moving)
+    return CaseResult(
+        case=case,
+        mode=mode,
+        rms_force=float(np.sqrt(np.mean(held.operator_force[moving] ** 2))),
+        vibration=_vibration(velocity, dt),
+        peak_speed=float(np.linalg.norm(velocity, axis=1).max()),
+        path_peak_speed=float(speeds.max()),
+        residual_force=float(np.mean(held.operator_force[holding])),
+        stop_time=stop_time,
+        drift=drift,
+        max_joint_speed=float(max(np.abs(held.qd_true).max(), np.abs(let_go.qd_true).max())),
+        observer_rms=observer[0],
+        observer_coverage=observer[1],
+        observer_std=observer[2],
+    )
+
+
+def _vibration(velocity: FloatArray, dt: float) -> float:
+    """RMS norm of the tool velocity above :data:`VIBRATION_CUTOFF` [m/s] (zero-phase)."""
+    from scipy.signal import butter, sosfiltfilt
+
+    sos = butter(2, VIBRATION_CUTOFF, "highpass", fs=1.0 / dt, output="sos")
+    high = sosfiltfilt(sos, velocity, axis=0)
+    return float(np.sqrt(np.mean(np.sum(high**2, axis=1))))
+
+
+def _release_figures(sim: SimulationResult, release: float) -> tuple[float, float]:
+    """Stop time [s] after ``release`` and the drift [rad] from 0.5 s after it on."""
+    after = sim.t >= release
+    moving = np.flatnonzero(after & np.any(np.abs(sim.qd_true) > MOVING_SPEED, axis=1))
+    stop_time = float(sim.t[moving[-1]] - release) if moving.size else 0.0
+    settled = sim.q_true[sim.t >= release + 0.5]
+    return stop_time, float(np.max(np.abs(settled - settled[0])))
+
+
+def _observer_figures(
+    sim: SimulationResult, recorder: _Recorder, moving: FloatArray
+) -> tuple[float, float, float]:
+    """Observer RMS error, ±2 std coverage and median std, relative to each joint's peak.
+
+    Joints whose peak operator torque is below 10 % of the largest joint's are left out
+    (their relative figures divide by almost nothing).
+    """
+    truth = sim.tau_operator[moving]
+    estimate = np.array(recorder.estimate)[moving]
+    std = np.array(recorder.std)[moving]
+    if not np.all(np.isfinite(estimate)):
+        return np.nan, np.nan, np.nan
+    peak = np.abs(truth).max(axis=0)
+    used = peak >= 0.1 * peak.max()
+    error = (estimate - truth)[:, used]
+    rms = np.sqrt(np.mean(error**2, axis=0)) / peak[used]
+    coverage = np.mean(np.abs(error) <= 2.0 * std[:, used])
+    spread = np.median(std[:, used], axis=0) / peak[used]
+    return float(rms.mean()), float(coverage), float(spread.mean())

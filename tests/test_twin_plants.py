@@ -1,0 +1,120 @@
+"""The plant family: dry friction physics, the seeded sampler, interface errors, release safety."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import leadthrough as lt
+from leadthrough.experiments.guiding import Case, run_case
+from leadthrough.model.dynamics import Dynamics
+from leadthrough.twin.dry_friction import DryFrictionParameters
+from leadthrough.twin.operator import TorqueProfile, step
+from leadthrough.twin.plants import PlantRanges, sample_plant
+from leadthrough.twin.sensors import SensorModel
+from leadthrough.twin.simulator import DigitalTwin, TwinConfig
+
+
+@pytest.fixture(scope="module")
+def robot():
+    """The nominal YuMi."""
+    return lt.robots.yumi()
+
+
+def _pushed_travel(robot, joint: int, fraction: float, periods: int = 150) -> float:
+    """Travel [rad] of ``joint`` under a torque ``fraction`` × its dry level at rest."""
+    twin = DigitalTwin(robot, TwinConfig(friction_physics="dry", delay_periods=0))
+    dynamics = Dynamics(twin.true_robot)
+    q0 = twin.truth.q.copy()
+    level = twin.friction.params.level(q0, np.zeros(robot.n_joints))[joint]
+    twin.operator = TorqueProfile(joint, (step(0.0, fraction * level),))
+    for _ in range(periods):
+        twin.send_torque(dynamics.gravity(twin.truth.q))  # the true gravity, held
+    return float(abs(twin.truth.q[joint] - q0[joint]))
+
+
+@pytest.mark.parametrize("joint", [1, 6])
+def test_dry_friction_sticks_below_and_slides_above_its_level(robot, joint):
+    """A torque at 90 % of the stiction level leaves the joint put; 110 % moves it."""
+    assert _pushed_travel(robot, joint, 0.9) < 1e-4
+    assert _pushed_travel(robot, joint, 1.1) > 0.02
+
+
+def test_dry_friction_level_stribeck_and_position():
+    """The level is τ_S at rest, → τ_C when sliding, and varies ±a with the position."""
+    p = DryFrictionParameters(coulomb=[1.0], static=[1.3], stribeck_velocity=[0.01],
+                              viscous=[0.0], position_amplitude=[0.15],
+                              position_wavenumber=[2.0], position_phase=[0.0])  # fmt: skip
+    assert p.level([0.0], [0.0])[0] == pytest.approx(1.3)
+    assert p.level([0.0], [0.1])[0] == pytest.approx(1.0, abs=1e-9)
+    assert p.level([np.pi / 4], [0.0])[0] == pytest.approx(1.3 * 1.15)
+    assert p.level([-np.pi / 4], [0.0])[0] == pytest.approx(1.3 * 0.85)
+
+
+def test_sampler_is_seeded_and_within_its_ranges(robot):
+    """The same seed gives the same plant; every draw lies in the stated ranges."""
+    r = PlantRanges()
+    assert repr(sample_plant(robot, 5, "dry")) == repr(sample_plant(robot, 5, "dry"))
+    for seed in range(6):
+        for physics in ("dry", "lugre"):
+            config = sample_plant(robot, seed, physics).config
+            s = config.sensors
+            assert r.delay_periods[0] <= config.delay_periods <= r.delay_periods[1]
+            assert np.all((np.array(s.torque_gain) >= 0.9) & (np.array(s.torque_gain) <= 1.1))
+            assert np.all(np.abs(s.torque_offset) <= 0.05)
+            assert r.velocity_cutoff[0] <= s.velocity_cutoff <= r.velocity_cutoff[1]
+            f = config.friction
+            ratio = f.static / np.maximum(f.coulomb, 1e-12)
+            assert np.all((ratio >= 1.1 - 1e-9) & (ratio <= 1.5 + 1e-9))
+            nominal = np.array([j.friction.coulomb for j in robot.joints])
+            assert np.all(np.abs(f.coulomb / nominal - 1.0) <= 0.2 + 1e-9)
+    assert repr(sample_plant(robot, 1, "dry")) != repr(sample_plant(robot, 2, "dry"))
+
+
+def test_differenced_velocity_lags_the_truth(robot):
+    """A low-passed difference of the encoder reports a ramp late, by ~dt/2 + 1/(2π f_c)."""
+    sensors = SensorModel(velocity_noise_std=0.0, velocity_cutoff=20.0)
+    twin = DigitalTwin(robot, TwinConfig(sensors=sensors))
+    dt, n = twin.dt, robot.n_joints
+    accel = 0.5  # [rad/s²] on every joint
+    reported = []
+    for k in range(100):
+        t = k * dt
+        reported.append(twin.sensors.joint_velocity(np.full(n, accel * t),
+                                                    np.full(n, 0.5 * accel * t * t)))  # fmt: skip
+    lag = accel * 99 * dt - reported[-1][0]
+    expected = accel * (dt / 2.0 + 1.0 / (2.0 * np.pi * 20.0))
+    assert lag == pytest.approx(expected, rel=0.1)
+
+
+def test_torque_constant_error_scales_applied_against_measured(robot):
+    """The drive applies gain × command and reports applied / gain + offset."""
+    gain = np.linspace(0.9, 1.1, robot.n_joints)
+    offset = np.full(robot.n_joints, 0.02)
+    sensors = SensorModel(torque_noise_std=0.0, torque_ripple=0.0, torque_gain=tuple(gain),
+                          torque_offset=tuple(offset))  # fmt: skip
+    twin = DigitalTwin(robot, TwinConfig(sensors=sensors, delay_periods=0))
+    command = Dynamics(robot).gravity(robot.home()) + 0.1
+    twin.send_torque(command)
+    np.testing.assert_allclose(twin.truth.tau_motor, gain * command, rtol=1e-12)
+    measured = twin.read_state().tau_measured
+    np.testing.assert_allclose(measured, command + offset, rtol=1e-12)
+
+
+def test_dry_truth_excludes_friction_from_the_external_torque(robot):
+    """On the dry plant at rest, nobody touching, the true external torque is zero."""
+    twin = DigitalTwin(robot, dataclasses.replace(TwinConfig(friction_physics="dry")))
+    for _ in range(50):
+        twin.send_torque(Dynamics(twin.true_robot).gravity(twin.truth.q) + 0.05)
+    np.testing.assert_allclose(twin.truth.tau_ext, 0.0, atol=1e-9)
+
+
+@pytest.mark.parametrize("case", [Case("lugre", 2, "relaxed", "upwards")])
+def test_active_release_stops_without_runaway(robot, case):
+    """Released at speed on a sampled plant, the active arm stops within 0.5 s, drifts < 1 mrad."""
+    result = run_case(case, "active", robot=robot)
+    assert result.stop_time <= 0.5
+    assert result.drift < 1e-3
+    assert result.max_joint_speed < 1.0
