@@ -23,35 +23,11 @@ import json
 import sys
 import time
 
-import numpy as np
+from leadthrough.experiments.guiding import GOALS, cases, evaluate
 
-import leadthrough as lt
-from leadthrough.experiments.guiding import CaseResult, cases, run_case
-
-COLUMNS = ("effort", "vibration", "speed", "residual", "stop", "drift", "obs_rms", "obs_cov",
-           "obs_std")  # fmt: skip
-HEADER = (f"{'case':<30}{'effort a/p':>11}{'vib a/p':>9}{'speed p|a':>12}{'resid p|a N':>13}"
-          f"{'stop s':>8}{'drift mrad':>11}{'obs rms':>8}{'cov':>6}{'std':>6}")  # fmt: skip
-
-
-def figures(passive: CaseResult, active: CaseResult) -> dict[str, float]:
-    """The benchmark's figures of one case (ratios of active over passive where stated)."""
-    allowed = 1.3 * active.path_peak_speed + 0.02
-    return {
-        "effort": active.rms_force / passive.rms_force,
-        "vibration": active.vibration / passive.vibration,
-        "speed_passive": passive.peak_speed / allowed,
-        "speed": active.peak_speed / allowed,
-        "residual_passive": passive.residual_force,
-        "residual_active": active.residual_force,
-        "residual": active.residual_force - passive.residual_force,
-        "stop": active.stop_time,
-        "drift": 1e3 * active.drift,
-        "obs_rms": active.observer_rms,
-        "obs_cov": active.observer_coverage,
-        "obs_std": active.observer_std,
-        "max_joint_speed": active.max_joint_speed,
-    }
+HEADER = (f"{'case':<30}{'effort a/p':>11}{'vib a/p':>9}{'speed p|a':>12}"
+          f"{'resid p|a N':>13}{'stop s':>8}{'drift mrad':>11}{'obs rms':>8}{'cov':>6}"
+          f"{'std':>6}{'cal':>5}")  # fmt: skip
 
 
 def row(name: str, f: dict[str, float]) -> str:
@@ -60,30 +36,8 @@ def row(name: str, f: dict[str, float]) -> str:
             f"{f['speed_passive']:>6.2f}|{f['speed']:<5.2f}"
             f"{f['residual_passive']:>7.1f}|{f['residual_active']:<5.1f}"
             f"{f['stop']:>8.2f}{f['drift']:>11.2f}{100 * f['obs_rms']:>7.0f}%"
-            f"{100 * f['obs_cov']:>5.0f}%{100 * f['obs_std']:>5.0f}%")  # fmt: skip
-
-
-#: (figure, which end is worst, goal text, check on (median, worst)).
-GOALS = (
-    ("effort", max, "median ≤ 0.5, worst ≤ 0.65", lambda m, w: m <= 0.5 and w <= 0.65),
-    ("vibration", max, "≤ 1.5 in every case", lambda m, w: w <= 1.5),
-    ("speed", max, "peak ≤ 1.3 × path + 0.02 m/s (≤ 1)", lambda m, w: w <= 1.0),
-    ("residual", max, "active − passive, median ≤ 0 N", lambda m, w: m <= 0.0),
-    ("stop", max, "≤ 0.5 s", lambda m, w: w <= 0.5),
-    ("drift", max, "< 1 mrad over 10 s", lambda m, w: w < 1.0),
-    ("obs_rms", max, "≤ 10 % of peak (mean over joints)", lambda m, w: m <= 0.1),
-    ("obs_cov", min, "90–99 %", lambda m, w: 0.9 <= m <= 0.99),
-    ("obs_std", max, "median std ≤ 30 % of peak", lambda m, w: m <= 0.3),
-)
-
-
-def summary(results: dict[str, dict[str, float]]) -> dict[str, dict[str, float]]:
-    """Median and worst of every figure over the cases."""
-    out = {}
-    for name, worst, _, _ in GOALS:
-        values = np.array([f[name] for f in results.values()])
-        out[name] = {"median": float(np.nanmedian(values)), "worst": float(worst(values))}
-    return out
+            f"{100 * f['obs_cov']:>5.0f}%{100 * f['obs_std']:>5.0f}%"
+            f"{'yes' if f['calibrated'] else 'NO':>5}")  # fmt: skip
 
 
 def print_summary(stats: dict[str, dict[str, float]], old: dict | None) -> None:
@@ -105,19 +59,18 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--save", help="write the per-case figures and the summary to JSON")
     parser.add_argument("--compare", help="a JSON saved before: print its summary alongside")
     args = parser.parse_args(argv)
-    robot = lt.robots.yumi()
-    chosen = cases(args.cases)
-    results: dict[str, dict[str, float]] = {}
-    start = time.perf_counter()
-    print(HEADER)
-    for k, case in enumerate(chosen, 1):
-        passive = run_case(case, "passive", robot=robot)
-        active = run_case(case, "active", robot=robot)
-        results[case.name] = figures(passive, active)
-        print(row(case.name, results[case.name]), flush=True)
-        print(f"  [{k}/{len(chosen)}, {time.perf_counter() - start:.0f} s]", end="\r",
+    total, start = len(cases(args.cases)), time.perf_counter()
+
+    def report(name: str, figures: dict[str, float]) -> None:
+        print(row(name, figures), flush=True)
+        done = len(reported) + 1
+        reported.append(name)
+        print(f"  [{done}/{total}, {time.perf_counter() - start:.0f} s]", end="\r",
               file=sys.stderr, flush=True)  # fmt: skip
-    stats = summary(results)
+
+    reported: list[str] = []
+    print(HEADER)
+    results, stats = evaluate(args.cases, report=report)
     old = None
     if args.compare:
         with open(args.compare) as handle:

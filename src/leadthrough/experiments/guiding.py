@@ -94,6 +94,8 @@ class CaseResult:
             joint's peak operator torque, mean over joints [–] (NaN if not readable).
         observer_coverage: Share of moving samples within ±2 std [–].
         observer_std: Median std over the joint's peak operator torque, mean over joints [–].
+        calibrated: Whether the controller's start-up calibration succeeded in the hold run
+            (True when the controller has none to report).
     """
 
     case: Case
@@ -109,6 +111,7 @@ class CaseResult:
     observer_rms: float
     observer_coverage: float
     observer_std: float
+    calibrated: bool = True
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary."""
@@ -129,9 +132,9 @@ def cases(kind: str = "full") -> list[Case]:
     return full
 
 
-def case_path(robot: RobotDescription, name: str) -> Path:
-    """The hand's path ``name`` from the flange position at the home pose."""
-    start = Dynamics(robot).pose(robot.home())[:3, 3]
+def case_path(robot: RobotDescription, name: str, start: FloatArray | None = None) -> Path:
+    """The hand's path ``name`` from ``start`` [m, world] (default: the flange at home)."""
+    start = Dynamics(robot).pose(robot.home())[:3, 3] if start is None else start
     if name == "circle":
         return Circle(start + np.array([0.0, 0.08, 0.0]), 0.08, (0.0, 0.0, 1.0),
                       (0.0, -1.0, 0.0), duration=CIRCLE_DURATION)  # fmt: skip
@@ -168,17 +171,25 @@ def _run(
     release: float,
     duration: float,
 ) -> tuple[SimulationResult, _Recorder]:
-    """One run from the grab on (t = 0 at the grab) and what the controller estimated."""
+    """One run from the grab on (t = 0 at the grab) and what the controller estimated.
+
+    The hand grabs the flange where it is once the calibration is over (the calibration
+    may have moved the arm a little): its path starts there.
+    """
     plant = sample_plant(robot, case.seed, case.physics)
     stiffness, damping = HANDS[case.hand]
-    hand = Hand(case_path(robot, case.path), stiffness=stiffness, damping=damping)
     recorder = _Recorder(factory(robot, mode))
     grab = float(getattr(recorder.controller, "calibration_time", CalibrationParameters().duration))
-    twin = DigitalTwin(robot, plant.config, During(hand, grab, grab + release))
-    whole = simulate(twin, recorder, grab + duration, progress=False)
-    first = len(whole.t) - len(whole.after(grab).t)
+    twin = DigitalTwin(robot, plant.config)
+    before = simulate(twin, recorder, grab, progress=False)
+    path = case_path(robot, case.path, twin.truth.flange_pose[:3, 3].copy())
+    hand = Hand(path, stiffness=stiffness, damping=damping)
+    grabbed = twin.time
+    twin.operator = During(hand, grabbed, grabbed + release)
+    sim = simulate(twin, recorder, duration, progress=False).after(grabbed)
+    first = len(before.t)
     recorder.estimate, recorder.std = recorder.estimate[first:], recorder.std[first:]
-    return whole.after(grab), recorder
+    return sim, recorder
 
 
 def run_case(
@@ -228,7 +239,16 @@ def run_case(
         observer_rms=observer[0],
         observer_coverage=observer[1],
         observer_std=observer[2],
+        calibrated=_calibrated(recorder.controller),
     )
+
+
+def _calibrated(controller: Any) -> bool:
+    """Whether the controller's calibration was accepted (True if it reports none)."""
+    if not hasattr(controller, "calibration"):
+        return True
+    calibration = controller.calibration
+    return calibration is not None and bool(getattr(calibration, "accepted", True))
 
 
 def _vibration(velocity: FloatArray, dt: float) -> float:
@@ -269,3 +289,84 @@ def _observer_figures(
     coverage = np.mean(np.abs(error) <= 2.0 * std[:, used])
     spread = np.median(std[:, used], axis=0) / peak[used]
     return float(rms.mean()), float(coverage), float(spread.mean())
+
+
+#: The goals of issue 13: (figure, worst end, goal text, check on (median, worst)).
+GOALS: tuple[tuple[str, Callable[..., float], str, Callable[[float, float], bool]], ...] = (
+    ("effort", max, "median ≤ 0.5, worst ≤ 0.65", lambda m, w: m <= 0.5 and w <= 0.65),
+    ("vibration", max, "≤ 1.5 in every case", lambda m, w: w <= 1.5),
+    ("speed", max, "peak ≤ 1.3 × path + 0.02 m/s (≤ 1)", lambda m, w: w <= 1.0),
+    ("residual", max, "active − passive, median ≤ 0 N", lambda m, w: m <= 0.0),
+    ("stop", max, "≤ 0.5 s", lambda m, w: w <= 0.5),
+    ("drift", max, "< 1 mrad over 10 s", lambda m, w: w < 1.0),
+    ("obs_rms", max, "≤ 10 % of peak (mean over joints)", lambda m, w: m <= 0.1),
+    ("obs_cov", min, "90–99 %", lambda m, w: 0.9 <= m <= 0.99),
+    ("obs_std", max, "median std ≤ 30 % of peak", lambda m, w: m <= 0.3),
+)
+
+
+def figures(passive: CaseResult, active: CaseResult) -> dict[str, float]:
+    """The benchmark's figures of one case: ratios active / passive where :data:`GOALS` says.
+
+    ``speed`` is the active peak tool speed over the allowed ``1.3 × path peak + 0.02 m/s``
+    (``speed_passive`` the passive one's), ``drift`` is in mrad, the observer's are the
+    active run's.
+    """
+    allowed = 1.3 * active.path_peak_speed + 0.02
+    return {
+        "effort": active.rms_force / passive.rms_force,
+        "vibration": active.vibration / passive.vibration,
+        "speed_passive": passive.peak_speed / allowed,
+        "speed": active.peak_speed / allowed,
+        "residual_passive": passive.residual_force,
+        "residual_active": active.residual_force,
+        "residual": active.residual_force - passive.residual_force,
+        "stop": active.stop_time,
+        "drift": 1e3 * active.drift,
+        "obs_rms": active.observer_rms,
+        "obs_cov": active.observer_coverage,
+        "obs_std": active.observer_std,
+        "max_joint_speed": active.max_joint_speed,
+        "calibrated": float(active.calibrated),
+    }
+
+
+def summary(results: dict[str, dict[str, float]]) -> dict[str, dict[str, float]]:
+    """Median and worst of every figure of :data:`GOALS` over the cases."""
+    out = {}
+    for name, worst, _, _ in GOALS:
+        values = np.array([f[name] for f in results.values()])
+        out[name] = {"median": float(np.nanmedian(values)), "worst": float(worst(values))}
+    return out
+
+
+def evaluate(
+    kind: str = "quick",
+    controller_factory: ControllerFactory | None = None,
+    robot: RobotDescription | None = None,
+    report: Callable[[str, dict[str, float]], None] | None = None,
+) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, float]]]:
+    """Every case of ``cases(kind)``: default passive against the active controller.
+
+    Args:
+        kind: ``"quick"`` (4 cases, < 1 min) or ``"full"``.
+        controller_factory: Builds the active controller, ``factory(robot, "active")``;
+            default :func:`default_factory`. Passive is always the default passive mode.
+        robot: The nominal description (default the YuMi).
+        report: Called with each case's name and figures as they come (progress).
+
+    Returns:
+        The figures per case name (:func:`figures`) and their :func:`summary`.
+    """
+    if robot is None:
+        from leadthrough.model import robots
+
+        robot = robots.yumi()
+    results = {}
+    for case in cases(kind):
+        passive = run_case(case, "passive", robot=robot)
+        active = run_case(case, "active", controller_factory, robot=robot)
+        results[case.name] = figures(passive, active)
+        if report is not None:
+            report(case.name, results[case.name])
+    return results, summary(results)
