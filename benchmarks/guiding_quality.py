@@ -14,11 +14,13 @@ friction (see :mod:`leadthrough.experiments.guiding`). Per case and as median / 
 
 Usage:
     python benchmarks/guiding_quality.py [--cases quick] [--save out.json] [--compare old.json]
+        [--factory module:function]   (the active controller: function(robot, mode))
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import sys
 import time
@@ -58,7 +60,16 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--cases", choices=("full", "quick"), default="full")
     parser.add_argument("--save", help="write the per-case figures and the summary to JSON")
     parser.add_argument("--compare", help="a JSON saved before: print its summary alongside")
+    parser.add_argument(
+        "--factory",
+        help="module:function building the active controller "
+        "from (robot, mode); default lt.LeadThrough(robot, mode=mode, dt=0.004)",
+    )
     args = parser.parse_args(argv)
+    factory = None
+    if args.factory:
+        module, _, name = args.factory.partition(":")
+        factory = getattr(importlib.import_module(module), name)
     total, start = len(cases(args.cases)), time.perf_counter()
 
     def report(name: str, figures: dict[str, float]) -> None:
@@ -70,7 +81,7 @@ def main(argv: list[str] | None = None) -> None:
 
     reported: list[str] = []
     print(HEADER)
-    results, stats = evaluate(args.cases, report=report)
+    results, stats = evaluate(args.cases, factory, report=report)
     old = None
     if args.compare:
         with open(args.compare) as handle:
