@@ -69,7 +69,7 @@ class PlantRanges:
     position_amplitude: float = 0.15
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Plant:
     """One sampled plant.
 
