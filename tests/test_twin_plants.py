@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from leadthrough.experiments.guiding import Case, run_case
+from leadthrough.experiments.guiding import Case, run_case, tool_vibration
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.twin.dry_friction import DryFrictionParameters
 from leadthrough.twin.operator import TorqueProfile, step
@@ -118,3 +118,13 @@ def test_active_release_stops_without_runaway(robot, case):
     assert result.stop_time <= 0.5
     assert result.drift < 1e-3
     assert result.max_joint_speed < 1.0
+
+
+def test_vibration_keeps_what_is_above_4_hz():
+    """A 12 Hz tool velocity of amplitude A reads A/√2; a 0.5 Hz one reads almost nothing."""
+    dt = 0.004
+    t = np.arange(0.0, 6.0, dt)[:, None]
+    fast = 0.01 * np.sin(2 * np.pi * 12.0 * t) * np.array([[1.0, 0.0, 0.0]])
+    slow = 0.1 * np.sin(2 * np.pi * 0.5 * t) * np.array([[0.0, 1.0, 0.0]])
+    assert tool_vibration(fast, dt) == pytest.approx(0.01 / np.sqrt(2.0), rel=0.03)
+    assert tool_vibration(slow, dt) < 0.02 * 0.1

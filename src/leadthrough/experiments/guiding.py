@@ -229,7 +229,7 @@ def run_case(
         case=case,
         mode=mode,
         rms_force=float(np.sqrt(np.mean(held.operator_force[moving] ** 2))),
-        vibration=_vibration(velocity, dt),
+        vibration=tool_vibration(velocity, dt),
         peak_speed=float(np.linalg.norm(velocity, axis=1).max()),
         path_peak_speed=float(speeds.max()),
         residual_force=float(np.mean(held.operator_force[holding])),
@@ -251,7 +251,7 @@ def _calibrated(controller: Any) -> bool:
     return calibration is not None and bool(getattr(calibration, "accepted", True))
 
 
-def _vibration(velocity: FloatArray, dt: float) -> float:
+def tool_vibration(velocity: FloatArray, dt: float) -> float:
     """RMS norm of the tool velocity above :data:`VIBRATION_CUTOFF` [m/s] (zero-phase)."""
     from scipy.signal import butter, sosfiltfilt
 
@@ -328,6 +328,10 @@ def figures(passive: CaseResult, active: CaseResult) -> dict[str, float]:
         "obs_std": active.observer_std,
         "max_joint_speed": active.max_joint_speed,
         "calibrated": float(active.calibrated),
+        "force_passive": passive.rms_force,
+        "force_active": active.rms_force,
+        "vibration_passive": passive.vibration,
+        "vibration_active": active.vibration,
     }
 
 
