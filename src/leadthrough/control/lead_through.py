@@ -39,7 +39,7 @@ from leadthrough.control.admittance import (
 from leadthrough.control.bias import ModelErrorBias
 from leadthrough.control.calibration import Calibration, CalibrationRun
 from leadthrough.control.constraints import VirtualConstraint, constraint_torque
-from leadthrough.control.feedforward import PassiveFeedForward
+from leadthrough.control.feedforward import FeedForwardTorques, PassiveFeedForward
 from leadthrough.control.parameters import LeadThroughParameters, Mode
 from leadthrough.errors import ParameterError
 from leadthrough.estimation.observer import MomentumObserver
@@ -165,7 +165,7 @@ class LeadThrough:
         self._sent = deque([np.zeros(n)] * max(p.measurement_delay, 1),
                            maxlen=max(p.measurement_delay, 1))  # fmt: skip
         self._time = 0.0
-        self.last_feed_forward = None
+        self.last_feed_forward: FeedForwardTorques | None = None
         self.calibration: Calibration | None = None
         self._calibration_run: CalibrationRun | None = None
         self._calibration_start = 0.0  # [s], set when the first sample arrives
