@@ -58,8 +58,11 @@ class CalibrationParameters:
         max_payload: Heaviest payload the calibration may report [kg].
         max_friction_change: Largest relative change of a Coulomb level it may report [–].
         friction_accuracy: Relative error of a measured Coulomb level away from the
-            calibration pose and speed (position dependence, Stribeck) [–]: what the
-            controller assumes of the friction of the joints that slid.
+            calibration pose and speed [–]: what the controller assumes of the friction of
+            the joints that slid. A 5 mrad stroke at 0.05 rad/s sees neither the position
+            dependence (±15 % on the plants of ``benchmarks/guiding_quality.py``) nor the
+            Stribeck curve: with 0.1 released arms crept up to 349 mrad there, with 0.2
+            at most 21 mrad.
     """
 
     stroke: float = 0.005
@@ -69,7 +72,7 @@ class CalibrationParameters:
     bandwidth: float = 8.0
     max_payload: float = 2.0
     max_friction_change: float = 0.5
-    friction_accuracy: float = 0.1
+    friction_accuracy: float = 0.2
 
     def __post_init__(self) -> None:
         names = ("stroke", "speed", "bandwidth", "max_payload", "max_friction_change",

@@ -161,6 +161,7 @@ class LeadThrough:
         self.model_error = ModelErrorBias(n, p.bias_time, p.mass_uncertainty)
         self._drive = np.zeros(n)
         self._weight = np.zeros(n)
+        self._feedback = np.zeros(n)  # the admittance's last tracking torque [Nm]
         self._references: AdmittanceState | None = None
         self._sent = deque([np.zeros(n)] * max(p.measurement_delay, 1),
                            maxlen=max(p.measurement_delay, 1))  # fmt: skip
@@ -256,6 +257,7 @@ class LeadThrough:
         unguided = (1.0 - float(np.max(self._weight))) ** 2 if clear_of_limits else 0.0
         self.model_error.update(estimate, gravity, self.dt, 2.0 * plausible, unguided)
         residual = dead_zone(estimate, 0.0, self.model_error.bias) - self._friction_margin(q, qd)
+        residual = residual - p.drive_gain_uncertainty * self._feedback
         uncertainty = (self._rest_tolerance + self.model_error.tolerance(gravity)
                        + self.friction.coulomb_uncertainty(qd, q))  # fmt: skip
         self._weight = operator_weight(residual, uncertainty, p.assist_knee)
@@ -299,7 +301,8 @@ class LeadThrough:
                                      np.maximum(self._reference_high, q))  # fmt: skip
         self._references = references
         kp = inertia * (2.0 * np.pi * p.position_bandwidth) ** 2
-        return tracking_torque(references, q, qd, kp, inertia / p.velocity_time)
+        self._feedback = tracking_torque(references, q, qd, kp, inertia / p.velocity_time)
+        return self._feedback
 
     def _ignore_end_stop_reaction(self, q: FloatArray, drive: FloatArray) -> FloatArray:
         """Near a limit, a torque pushing away from it is the end-stop's reaction."""

@@ -63,8 +63,14 @@ class LeadThroughParameters:
         assist_knee: Residual torque, in multiples of the model's uncertainty, of which half
             passes to the admittance [–] (:func:`~leadthrough.control.admittance.operator_weight`);
             0 passes everything (the thesis).
+        drive_gain_uncertainty: Relative error of the drives' torque constants [–]: a drive
+            that applies 10 % more than it reports makes 10 % of the tracking torque read
+            as a push along it (positive feedback); that much of the last tracking torque
+            is taken off the estimate, so the error reads as drag instead.
         position_bandwidth: K_P_ii = m_ii(q) (2π f)² [Hz]; 0 is damping control (§6.3.1).
-        velocity_time: K_D_ii = m_ii(q) / velocity_time [s].
+        velocity_time: K_D_ii = m_ii(q) / velocity_time [s]: 20 rad/s, below the bandwidth
+            of a differenced, filtered velocity (15–40 Hz); a stiffer velocity loop on that
+            lagging signal oscillates.
         stiction_margin: Relative Coulomb error at rest that no sigmoid model describes
             (stiction, Stribeck) [–]; part of what the model may read without an operator,
             and the smallest friction error assumed.
@@ -98,11 +104,12 @@ class LeadThroughParameters:
     )
     safety: SafetyParameters = field(default_factory=SafetyParameters)
     inertia_scale: float = 2.0
-    damping_time: float = 0.7
+    damping_time: float = 0.5
     rest_damping: float = 20.0
     assist_knee: float = 0.5
+    drive_gain_uncertainty: float = 0.1
     position_bandwidth: float = 1.0
-    velocity_time: float = 0.02
+    velocity_time: float = 0.05
     mass_uncertainty: float = 0.05
     friction_uncertainty: float | None = None
     stiction_margin: float = 0.05
@@ -127,6 +134,7 @@ class LeadThroughParameters:
             "stiction_margin",
             "rest_damping",
             "assist_knee",
+            "drive_gain_uncertainty",
         ):
             real(name, getattr(self, name), minimum=0.0, error=ParameterError)
         if self.friction_uncertainty is not None:
@@ -148,7 +156,8 @@ class LeadThroughParameters:
         """
         return cls(inertia_scale=1.0, damping_time=20.0, rest_damping=0.0, assist_knee=0.0,
                    position_bandwidth=6.0, velocity_time=0.008, mass_uncertainty=0.0,
-                   friction_uncertainty=0.0, stiction_margin=0.0, bias_time=1e6,
+                   friction_uncertainty=0.0, stiction_margin=0.0, drive_gain_uncertainty=0.0,
+                   bias_time=1e6,
                    reanchor_error=1e6,
                    limit_aware=False, dither=None, **changes)  # fmt: skip
 
