@@ -19,16 +19,22 @@ ARMS = [
 
 TOLERANCE = 1e-9
 
+#: A URDF without drive data warns once about what it assumes (tested in test_robots.py).
+pytestmark = pytest.mark.filterwarnings("ignore::leadthrough.model.robots.AssumedDriveDataWarning")
+
 
 class Reference:
     """Pinocchio built straight from the URDF, independently of leadthrough."""
 
-    def __init__(self, path: Path, tip: str | None, locked: tuple[str, ...]) -> None:
+    def __init__(
+        self, path: Path, tip: str | None, locked: tuple[str, ...], armature: np.ndarray
+    ) -> None:
         model = pin.buildModelFromUrdf(str(path))
         if locked:
             ids = [model.getJointId(name) for name in locked]
             assert all(joint_id < model.njoints for joint_id in ids), locked
             model = pin.buildReducedModel(model, ids, pin.neutral(model))
+        model.armature = armature  # the URDF has none: the assumed reflected rotor inertia
         self.model = model
         self.data = model.createData()
         self.tip = tip
@@ -68,7 +74,7 @@ def test_dynamics_match_pinocchio_from_urdf(robots_dir, urdf, tip, locked, quant
     """Gravity, mass, Coriolis and tip pose of a URDF arm equal Pinocchio's on the raw URDF."""
     robot = lt.robots.from_urdf(robots_dir / urdf, tip=tip)
     dyn = lt.Dynamics(robot)
-    reference = Reference(robots_dir / urdf, tip, locked)
+    reference = Reference(robots_dir / urdf, tip, locked, robot.reflected_rotor_inertias)
     assert reference.model.nq == reference.model.nv == robot.n_joints
     rng = np.random.default_rng(0)
     for _ in range(5):
@@ -83,15 +89,17 @@ def test_dynamics_match_pinocchio_from_urdf(robots_dir, urdf, tip, locked, quant
 def test_joints_and_limits_match_urdf(robots_dir, urdf, tip, locked):
     """Joint names, order and limits of a URDF arm are those of the URDF chain."""
     robot = lt.robots.from_urdf(robots_dir / urdf, tip=tip)
-    model = Reference(robots_dir / urdf, tip, locked).model
+    model = Reference(robots_dir / urdf, tip, locked, robot.reflected_rotor_inertias).model
     assert robot.joint_names == tuple(model.names[1:])
     assert not robot.uses_dh
     np.testing.assert_array_equal(robot.q_min, model.lowerPositionLimit)
     np.testing.assert_array_equal(robot.q_max, model.upperPositionLimit)
     np.testing.assert_array_equal(robot.velocity_limits, model.velocityLimit)
     np.testing.assert_array_equal(robot.torque_limits, model.effortLimit)
-    np.testing.assert_array_equal(robot.gear_ratios, np.ones(robot.n_joints))
-    np.testing.assert_array_equal(robot.rotor_inertias, np.zeros(robot.n_joints))
+    drive = lt.robots.drive
+    np.testing.assert_array_equal(robot.gear_ratios, drive.ASSUMED_GEAR_RATIO)
+    assumed = drive.INERTIA_PER_TORQUE_LIMIT * robot.torque_limits
+    np.testing.assert_allclose(robot.reflected_rotor_inertias, assumed, rtol=1e-12)
 
 
 # --- errors ----------------------------------------------------------------------------------

@@ -3,9 +3,10 @@
 The URDF is parsed by Pinocchio (fixed joints merged into their parents). The chain
 from the root to ``tip`` becomes the arm; any other moving joint (fingers, a second
 arm) is locked at its neutral position, its links merged into the link that carries
-it. URDF carries no gear ratios, rotor inertias or friction sigmoids: gear ratios
-default to 1, rotor inertias to 0, and friction to the URDF ``<dynamics friction
-damping>`` as Coulomb level and viscous coefficient, all overridable.
+it. URDF carries no gear ratios, rotor inertias, friction sigmoids or home pose: they
+come from the arguments, a drive data file, the URDF ``<dynamics friction damping>``
+(as Coulomb level and viscous coefficient, when any is non-zero), and what is still
+missing is assumed with one warning naming it (:mod:`leadthrough.model.robots.drive`).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from leadthrough.model.description import (
     Placement,
     RobotDescription,
 )
+from leadthrough.model.robots.drive import complete_drive_data
 from leadthrough.validation import within
 
 _REVOLUTE = {
@@ -45,6 +47,7 @@ def from_urdf(
     gear_ratios: Sequence[float] | None = None,
     rotor_inertias: Sequence[float] | None = None,
     friction: Sequence[JointFriction] | None = None,
+    drive_data: str | Path | None = None,
 ) -> RobotDescription:
     """Load the serial arm from the URDF root to the link ``tip``.
 
@@ -52,9 +55,17 @@ def from_urdf(
         path: URDF file.
         tip: Name of the link (or frame) that is the flange. Without it the moving
             joints must form one chain, whose last joint frame is the flange.
-        gear_ratios: Gear ratio per chain joint (default 1).
-        rotor_inertias: Motor-side rotor inertia per chain joint [kg m²] (default 0).
+        gear_ratios: Gear ratio per chain joint.
+        rotor_inertias: Motor-side rotor inertia per chain joint [kg m²].
         friction: Friction per chain joint (default from the URDF ``<dynamics>``).
+        drive_data: Drive data TOML file (per-joint gear ratios, rotor inertias,
+            torque constants, friction, home; see :func:`with_drive_data`). Values in it
+            replace those of the URDF and of the arguments.
+
+    Warns:
+        AssumedDriveDataWarning: Once, naming what neither the arguments, the URDF nor
+            the drive data give (gear ratios, rotor inertias, friction, home pose) and
+            what is assumed instead.
 
     Raises:
         RobotDescriptionError: The file is unreadable, not a URDF, ``tip`` is unknown,
@@ -73,7 +84,13 @@ def from_urdf(
         model = _lock_off_chain(full, chain_ids)
         joints = _joints(model, gear_ratios, rotor_inertias, friction)
         flange = _flange(model, tip_frame)
-        return RobotDescription(name=full.name or Path(path).stem, joints=joints, flange=flange)
+        robot = RobotDescription(name=full.name or Path(path).stem, joints=joints, flange=flange)
+    missing = {"home"}
+    missing |= {"gear_ratio"} if gear_ratios is None else set()
+    missing |= {"rotor_inertia"} if rotor_inertias is None else set()
+    urdf_friction = any(joint.friction.coulomb > 0.0 for joint in robot.joints)
+    missing |= {"friction"} if friction is None and not urdf_friction else set()
+    return complete_drive_data(robot, missing, drive_data)
 
 
 def _chain(model: pin.Model, tip: str | None) -> tuple[list[int], str | None]:

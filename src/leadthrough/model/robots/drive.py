@@ -1,0 +1,224 @@
+"""Drive data a URDF does not carry: from a per-robot TOML file, else stated assumptions.
+
+A URDF describes links and limits; gear ratios, rotor inertias, friction sigmoids, torque
+constants and a home pose are not in it. :func:`complete_drive_data` fills them from a
+drive data file (per-joint lists, each number with its source in the file's comments)
+and assumes what is still missing, scaled by each joint's torque limit from the arms
+whose numbers are public, with **one** :class:`AssumedDriveDataWarning` naming every
+assumed quantity:
+
+==================  =====================================  ==================================
+quantity            assumed                                public numbers it is taken from
+==================  =====================================  ==================================
+gear ratio          100                                    YuMi ±100/101, UR10e 101
+reflected rotor     2e-3 s² · τ_max [kg m²]                YuMi 2.6e-4…2.7e-3, UR10e up to
+inertia G_r² J_m                                           1.1e-2, Panda 1.1e-3…8.3e-3 per Nm
+Coulomb level τ_C   0.03 · τ_max [Nm]                      YuMi 1.3…5 %, UR10e 3.3…4 %
+viscous c           0.02 s/rad · τ_max [Nm s/rad]          YuMi 0.003…0.037, UR10e 0.04…0.07
+home pose           0 where 0 is ≥ 10 % of the range       —
+                    inside the limits, else mid-range
+==================  =====================================  ==================================
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from leadthrough.errors import RobotDescriptionError
+from leadthrough.model.description import Joint, JointFriction, RobotDescription
+
+__all__ = [
+    "ASSUMED_GEAR_RATIO",
+    "COULOMB_PER_TORQUE_LIMIT",
+    "HOME_MARGIN",
+    "INERTIA_PER_TORQUE_LIMIT",
+    "VISCOUS_PER_TORQUE_LIMIT",
+    "AssumedDriveDataWarning",
+    "complete_drive_data",
+    "read_drive_data",
+    "with_drive_data",
+]
+
+#: Gear ratio assumed for a joint without drive data (harmonic drives of 100:1 and 101:1).
+ASSUMED_GEAR_RATIO = 100.0
+#: Reflected rotor inertia per Nm of torque limit [kg m²/Nm = s²] assumed without data.
+INERTIA_PER_TORQUE_LIMIT = 2e-3
+#: Coulomb level as a fraction of the torque limit assumed without data.
+COULOMB_PER_TORQUE_LIMIT = 0.03
+#: Viscous coefficient per Nm of torque limit [s/rad] assumed without data.
+VISCOUS_PER_TORQUE_LIMIT = 0.02
+#: Sigmoid slope A [s/rad], half-width B [rad/s] and noise (fraction of τ_C) assumed
+#: without data: the thesis' Table 4.1 values.
+ASSUMED_SLOPE, ASSUMED_HALF_WIDTH, ASSUMED_NOISE_FRACTION = 5e3, 2e-3, 0.05
+#: The zero reading is home for a joint if it is this fraction of the range inside.
+HOME_MARGIN = 0.1
+
+_FRICTION_KEYS = ("coulomb", "viscous", "slope", "half_width", "noise_std")
+_DRIVE_KEYS = ("gear_ratio", "rotor_inertia", "torque_constant")
+_ALL_KEYS = (*_DRIVE_KEYS, *_FRICTION_KEYS, "home", "assumed")
+#: What a drive data file or an argument can supply (``friction`` as a whole).
+QUANTITIES = ("gear_ratio", "rotor_inertia", "friction", "home")
+
+
+class AssumedDriveDataWarning(UserWarning):
+    """A robot's drive data (gear ratios, rotor inertias, friction, home) were assumed."""
+
+
+def read_drive_data(path: str | Path, n_joints: int) -> dict[str, Any]:
+    """The per-joint lists (and ``home``, ``assumed``) of a drive data TOML file.
+
+    Raises:
+        RobotDescriptionError: The file is unreadable, has an unknown key or a list
+            without one number per joint; the message names the file and the key.
+    """
+    source = str(path)
+    try:
+        data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
+        raise RobotDescriptionError(source, "", f"cannot read drive data: {error}") from None
+    unknown = sorted(set(data) - set(_ALL_KEYS))
+    if unknown:
+        raise RobotDescriptionError(source, unknown[0], "unknown drive data key")
+    assumed = data.get("assumed", [])
+    if not isinstance(assumed, list) or not all(isinstance(item, str) for item in assumed):
+        raise RobotDescriptionError(source, "assumed", "needs a list of strings")
+    for key, values in data.items():
+        if key == "assumed":
+            continue
+        if not isinstance(values, list) or len(values) != n_joints:
+            raise RobotDescriptionError(source, key, f"needs a list of {n_joints} numbers")
+        if not all(isinstance(value, int | float) for value in values):
+            raise RobotDescriptionError(source, key, "needs numbers")
+    return data
+
+
+def with_drive_data(robot: RobotDescription, path: str | Path) -> RobotDescription:
+    """``robot`` with the drive data of a TOML file; nothing assumed, nothing warned.
+
+    Keys (all optional): ``gear_ratio``, ``rotor_inertia`` [kg m², motor side],
+    ``torque_constant`` [Nm/A, arm side], friction ``coulomb`` [Nm], ``viscous``
+    [Nm s/rad], ``slope`` [s/rad], ``half_width`` [rad/s], ``noise_std`` [Nm], and
+    ``home`` [rad]. Each list has one value per joint, base first. ``assumed`` lists
+    (as short strings) what the file itself assumes, named by :func:`complete_drive_data`.
+
+    Raises:
+        RobotDescriptionError: The file is unreadable, a list has the wrong length or a
+            value is invalid.
+    """
+    data = read_drive_data(path, robot.n_joints)
+    try:
+        return _apply(robot, data)
+    except RobotDescriptionError as error:
+        raise RobotDescriptionError(str(path), "", str(error)) from None
+
+
+def complete_drive_data(
+    robot: RobotDescription,
+    missing: set[str],
+    drive_data: str | Path | None = None,
+) -> RobotDescription:
+    """``robot`` with ``drive_data`` applied and what is still ``missing`` assumed.
+
+    Args:
+        robot: A description whose ``missing`` quantities (of :data:`QUANTITIES`) hold
+            placeholders (e.g. a URDF's gear ratio 1 and rotor inertia 0).
+        missing: Quantities the description does not know.
+        drive_data: Drive data TOML file (see :func:`with_drive_data`), or None.
+
+    Warns:
+        AssumedDriveDataWarning: Once, naming every quantity assumed (by this function
+            or by the drive data file's ``assumed`` list) and the assumed values.
+    """
+    assumed_by_file: list[str] = []
+    if drive_data is not None:
+        data = read_drive_data(drive_data, robot.n_joints)
+        robot = _apply(robot, data)
+        assumed_by_file = list(data.get("assumed", []))
+        missing = missing - _supplied(data)
+    robot, notes = _assume(robot, missing)
+    if assumed_by_file:
+        notes.append(f"{', '.join(assumed_by_file)} (stated in {Path(str(drive_data)).name})")
+    if notes:
+        message = f"{robot.name}: drive data assumed (no public numbers): " + "; ".join(notes)
+        warnings.warn(message, AssumedDriveDataWarning, stacklevel=3)
+    return robot
+
+
+def _supplied(data: dict[str, Any]) -> set[str]:
+    """The :data:`QUANTITIES` a drive data file supplies."""
+    supplied = {key for key in ("gear_ratio", "rotor_inertia", "home") if key in data}
+    return supplied | ({"friction"} if "coulomb" in data else set())
+
+
+def _apply(robot: RobotDescription, data: dict[str, Any]) -> RobotDescription:
+    """``robot`` with the per-joint lists of ``data`` replacing its values."""
+    joints = []
+    for i, joint in enumerate(robot.joints):
+        changed = {key: float(data[key][i]) for key in _FRICTION_KEYS if key in data}
+        friction = dataclasses.replace(joint.friction, **changed)
+        drive: dict[str, Any] = {key: float(data[key][i]) for key in _DRIVE_KEYS if key in data}
+        joints.append(dataclasses.replace(joint, friction=friction, **drive))
+    home = np.array(data["home"], dtype=float) if "home" in data else robot.home_position
+    return dataclasses.replace(robot, joints=tuple(joints), home_position=home)
+
+
+def _assume(robot: RobotDescription, missing: set[str]) -> tuple[RobotDescription, list[str]]:
+    """``robot`` with the ``missing`` quantities assumed, and a note per quantity."""
+    notes = []
+    limits = robot.torque_limits
+    joints = list(robot.joints)
+    if "gear_ratio" in missing:
+        joints = [_with_gear(joint, ASSUMED_GEAR_RATIO) for joint in joints]
+        notes.append(f"gear ratio {ASSUMED_GEAR_RATIO:g}")
+    if "rotor_inertia" in missing:
+        reflected = INERTIA_PER_TORQUE_LIMIT * limits
+        joints = [
+            dataclasses.replace(joint, rotor_inertia=float(r / joint.gear_ratio**2))
+            for joint, r in zip(joints, reflected, strict=True)
+        ]
+        notes.append(f"reflected rotor inertia {_values(reflected)} kg m² "
+                     f"({INERTIA_PER_TORQUE_LIMIT:g} s² × torque limit)")  # fmt: skip
+    if "friction" in missing:
+        joints = [dataclasses.replace(joint, friction=_assumed_friction(joint)) for joint in joints]
+        notes.append(f"Coulomb friction {_values(COULOMB_PER_TORQUE_LIMIT * limits)} Nm "
+                     f"({COULOMB_PER_TORQUE_LIMIT:g} × torque limit), viscous "
+                     f"{_values(VISCOUS_PER_TORQUE_LIMIT * limits)} Nm s/rad")  # fmt: skip
+    home = robot.home_position
+    if "home" in missing:
+        home = _assumed_home(robot.q_min, robot.q_max)
+        notes.append(f"home {_values(home)} rad")
+    return dataclasses.replace(robot, joints=tuple(joints), home_position=home), notes
+
+
+def _with_gear(joint: Joint, gear: float) -> Joint:
+    """``joint`` with gear ratio ``gear``, its reflected rotor inertia unchanged."""
+    rotor = joint.reflected_rotor_inertia / gear**2
+    return dataclasses.replace(joint, gear_ratio=gear, rotor_inertia=rotor)
+
+
+def _assumed_friction(joint: Joint) -> JointFriction:
+    coulomb = COULOMB_PER_TORQUE_LIMIT * joint.torque_limit
+    return JointFriction(
+        coulomb=coulomb,
+        slope=ASSUMED_SLOPE,
+        half_width=ASSUMED_HALF_WIDTH,
+        viscous=VISCOUS_PER_TORQUE_LIMIT * joint.torque_limit,
+        noise_std=ASSUMED_NOISE_FRACTION * coulomb,
+    )
+
+
+def _assumed_home(q_min: np.ndarray, q_max: np.ndarray) -> np.ndarray:
+    """Zero where zero is well inside the limits (:data:`HOME_MARGIN`), else mid-range."""
+    margin = HOME_MARGIN * (q_max - q_min)
+    inside = (q_min + margin <= 0.0) & (q_max - margin >= 0.0)
+    return np.where(inside, 0.0, 0.5 * (q_min + q_max))
+
+
+def _values(values: np.ndarray) -> str:
+    return "[" + ", ".join(f"{value:.3g}" for value in values) + "]"

@@ -1,0 +1,141 @@
+"""The robot registry and drive data: shipped arms, per-robot data files, stated assumptions."""
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import leadthrough as lt
+from leadthrough.errors import RobotDescriptionError
+from leadthrough.model.robots import AssumedDriveDataWarning
+
+THREE_JOINT = Path(__file__).parent / "robots" / "three_joint.urdf"
+REALDATA = Path(__file__).resolve().parents[2] / "shared" / "realdata"
+DATA = Path(lt.robots.__file__).parent / "data"
+
+#: Published numbers the drive data files must carry.
+UR10E_K = [10.0, 10.6956, 8.4566, 9.0029, 9.4800, 10.1232]  # Mamedov & Mikhel 2020 [Nm/A]
+GAZ_PHI1 = [0.54615, 0.87224, 0.64068, 1.2794, 0.83904, 0.30301, 0.56489]  # Table I [Nm]
+GAZ_PHI2 = [5.1181, 9.0657, 10.136, 5.5903, 8.3469, 17.133, 10.336]  # Table I [s/rad]
+
+
+def quietly(load, *args, **kwargs):
+    """``load(*args, **kwargs)`` with its drive data warnings recorded, and those warnings."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        robot = load(*args, **kwargs)
+    return robot, [w for w in caught if issubclass(w.category, AssumedDriveDataWarning)]
+
+
+def test_registered_names():
+    """names() lists the shipped arms, YuMi first."""
+    assert lt.robots.names() == ["yumi", "panda", "ur5", "ur10e"]
+
+
+@pytest.mark.parametrize("name", lt.robots.names())
+def test_shipped_robot_loads_with_home_well_inside_its_limits(name):
+    """Every shipped arm loads by name and its home pose is ≥ 5 % of each range inside."""
+    robot, _ = quietly(lt.robots.load, name)
+    home = robot.home()
+    margin = 0.05 * (robot.q_max - robot.q_min)
+    assert np.all(home >= robot.q_min + margin) and np.all(home <= robot.q_max - margin)
+    assert np.all(robot.reflected_rotor_inertias > 0), "the twin needs a positive armature"
+
+
+@pytest.mark.parametrize(("name", "warns"), [("yumi", 0), ("panda", 1), ("ur5", 1), ("ur10e", 1)])
+def test_shipped_robot_warns_once_about_what_it_assumes(name, warns):
+    """A shipped arm warns exactly once when some of its drive data are assumed, else never."""
+    _, caught = quietly(lt.robots.load, name)
+    assert len(caught) == warns
+
+
+def test_ur10e_torque_constants_are_the_published_ones():
+    """UR10e: τ = K·i with Mamedov & Mikhel's K per joint [Nm/A], as data."""
+    robot, _ = quietly(lt.robots.ur10e)
+    np.testing.assert_array_equal([joint.torque_constant for joint in robot.joints], UR10E_K)
+    np.testing.assert_allclose(robot.home(), [0, -np.pi / 2, np.pi / 2, -np.pi / 2, -np.pi / 2, 0],
+                               atol=1e-4)  # fmt: skip
+
+
+def test_panda_friction_is_gaz_table_one_with_phi3_zero():
+    """Panda: our mean friction equals Gaz et al.'s sigmoid φ1 s(φ2 q̇) − φ1/2 (φ3 = 0)."""
+    robot, _ = quietly(lt.robots.panda)
+    friction = lt.FrictionModel.from_robot(robot)
+    qd = np.linspace(-1.0, 1.0, 41)[:, None]
+    phi1, phi2 = np.array(GAZ_PHI1), np.array(GAZ_PHI2)
+    gaz = phi1 / (1.0 + np.exp(-phi2 * qd)) - phi1 / 2.0
+    # The band of half-width B = 2e-3 rad/s around the curve shifts the mean by < 1e-3 Nm.
+    np.testing.assert_allclose(friction.mean(qd), gaz, atol=1e-3)
+
+
+def test_panda_ready_pose():
+    """Panda: home is Franka's ready pose, not the zero pose clipped onto joint 4's limit."""
+    robot, _ = quietly(lt.robots.panda)
+    ready = [0, -np.pi / 4, 0, -3 * np.pi / 4, 0, np.pi / 2, np.pi / 4]
+    np.testing.assert_allclose(robot.home(), ready, atol=1e-5)
+
+
+def test_urdf_without_drive_data_warns_once_naming_every_assumption():
+    """A bare URDF: gear ratio, rotor inertia, friction and home assumed, in one warning."""
+    robot, caught = quietly(lt.robots.from_urdf, THREE_JOINT)
+    assert len(caught) == 1
+    message = str(caught[0].message)
+    for words in ("gear ratio 100", "reflected rotor inertia", "Coulomb friction", "home"):
+        assert words in message
+    limits = np.array([40.0, 40.0, 20.0])
+    np.testing.assert_allclose(robot.reflected_rotor_inertias, 2e-3 * limits, rtol=1e-12)
+    np.testing.assert_allclose([j.friction.coulomb for j in robot.joints], 0.03 * limits)
+    # zero is inside yaw's and shoulder's limits; the elbow's range [0.2, 2.6] excludes it
+    np.testing.assert_allclose(robot.home(), [0.0, 0.0, 1.4])
+
+
+def test_given_drive_data_are_not_assumed(tmp_path):
+    """Arguments and a drive data file replace the assumptions; what they give is not named."""
+    drive = tmp_path / "drive.toml"
+    drive.write_text("coulomb = [1.0, 1.0, 0.5]\nhome = [0.1, 0.2, 1.0]\n")
+    robot, caught = quietly(
+        lt.robots.from_urdf, THREE_JOINT, gear_ratios=[50, 50, 50], drive_data=drive
+    )
+    message = str(caught[0].message)
+    assert "gear ratio" not in message and "Coulomb" not in message and "home" not in message
+    assert "rotor inertia" in message
+    np.testing.assert_array_equal(robot.gear_ratios, 50.0)
+    np.testing.assert_array_equal(robot.home(), [0.1, 0.2, 1.0])
+
+
+@pytest.mark.parametrize(
+    ("text", "key"),
+    [
+        ("coulomb = [1.0, 2.0]\n", "coulomb"),
+        ("gear = [1.0, 2.0, 3.0]\n", "gear"),
+        ("home = [0.0, 0.0, 'x']\n", "home"),
+        ("assumed = 'everything'\n", "assumed"),
+    ],
+)
+def test_bad_drive_data_names_the_file_and_key(tmp_path, text, key):
+    """A wrong drive data file is one error naming the file and the key."""
+    drive = tmp_path / "bad.toml"
+    drive.write_text(text)
+    with pytest.raises(RobotDescriptionError, match=rf"bad\.toml.*{key}"):
+        lt.robots.from_urdf(THREE_JOINT, drive_data=drive)
+
+
+def test_unknown_robot_name_lists_the_shipped_ones():
+    """An unknown name is an error that lists the shipped robots."""
+    with pytest.raises(RobotDescriptionError, match="yumi, panda, ur5, ur10e"):
+        lt.robots.load("pandas")
+
+
+def test_panda_with_identified_inertials_and_the_shipped_drive_data():
+    """Gaz et al.'s identified Panda URDF + the Panda drive data: Gaz's masses and friction."""
+    urdf = REALDATA / "panda_gaz2019" / "panda_identified.urdf"
+    if not urdf.is_file():
+        pytest.skip(f"real data absent: {urdf}")
+    robot, _ = quietly(lt.robots.from_urdf, urdf, drive_data=DATA / "panda_drive.toml")
+    shipped, _ = quietly(lt.robots.panda)
+    assert robot.n_joints == 7
+    np.testing.assert_allclose(robot.joints[0].link.mass, 4.970684)
+    coulomb = [joint.friction.coulomb for joint in robot.joints]
+    assert coulomb == [joint.friction.coulomb for joint in shipped.joints]
+    np.testing.assert_allclose(robot.home(), shipped.home())
