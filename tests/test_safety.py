@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -140,7 +142,7 @@ def test_garbage_and_internal_errors_never_escape(sup, dyn, monkeypatch):
     assert not sup.check(0.0, "not a position", None, None)
     assert sup.fault_reason.startswith("sensor check failed: ValueError")
     sup.reset()
-    monkeypatch.setattr(dyn, "mass", lambda q: 1 / 0)
+    monkeypatch.setattr(dyn, "snapshot", lambda q, qd: 1 / 0)
     out = sup.command(0.0, MID, np.zeros(N), np.zeros(N))
     assert sup.fault_reason == "command failed: ZeroDivisionError: division by zero"
     assert np.all(np.isfinite(out)) and np.all(np.abs(out) <= LIMIT)
@@ -318,3 +320,49 @@ def test_invalid_period_is_rejected(dyn):
     """A non-positive control period raises a ParameterError naming dt."""
     with pytest.raises(ParameterError, match="dt"):
         SafetySupervisor(dyn, dt=0.0)
+
+
+def test_use_model_keeps_robot_dynamics_and_bounds_together(sup):
+    """After a payload the supervisor's robot is its model's; the safe stop holds the payload."""
+    loaded = lt.Dynamics(ROBOT.with_payload(1.5))
+    sup.use_model(loaded)
+    assert sup.robot is sup.dynamics.robot is loaded.robot
+    assert sup.check(0.0, MID, np.zeros(N))
+    sup.stop("test")
+    hold = sup.command(1.0, MID, np.zeros(N), np.zeros(N))  # past the damped phase
+    np.testing.assert_allclose(hold, np.clip(loaded.gravity(MID), -LIMIT, LIMIT), atol=1e-12)
+    with pytest.raises(ParameterError, match="joints"):
+        six = dataclasses.replace(ROBOT, joints=ROBOT.joints[:6], home_position=None)
+        sup.use_model(lt.Dynamics(six))
+
+
+def test_a_failed_safe_stop_is_an_event(sup, dyn, monkeypatch):
+    """A safe stop that cannot be computed sends zero torque and logs it once."""
+    assert sup.check(0.0, MID, np.zeros(N))
+    sup.stop("test")
+    monkeypatch.setattr(dyn, "gravity", lambda q: 1 / 0)
+    for k in range(3):
+        out = sup.command(k * DT, MID, np.zeros(N), np.zeros(N))
+        np.testing.assert_array_equal(out, 0.0)
+    (detail,) = kinds(sup, "safe_stop_failed")
+    assert "ZeroDivisionError" in detail
+
+
+def test_the_tool_speed_limit_holds_at_the_tool_centre_point():
+    """A 15 cm tool turning at 2.5 rad/s about a still flange: its tip (0.375 m/s) is braked."""
+    tool = dataclasses.replace(ROBOT, tcp=lt.Placement([0.0, 0.0, 0.15]))
+    q = ROBOT.home()
+    flange = lt.Dynamics(ROBOT)
+    axis = np.cross(flange.pose(q)[:3, 2], [0.0, 0.0, 1.0])
+    twist = np.concatenate([np.zeros(3), 2.5 * axis / np.linalg.norm(axis)])
+    qd = np.linalg.pinv(flange.jacobian(q)) @ twist  # flange origin still, flange turning
+    assert np.linalg.norm(flange.jacobian(q)[:3] @ qd) < 1e-9
+    assert np.all(np.abs(qd) < ROBOT.velocity_limits)
+    bare, tipped = SafetySupervisor(flange, DT), SafetySupervisor(lt.Dynamics(tool), DT)
+    for supervisor in (bare, tipped):
+        supervisor.teach()
+        assert supervisor.check(0.0, q, qd)
+        supervisor.command(0.0, q, qd, flange.gravity(q))
+    assert bare.max_tool_speed < 1e-9 and not kinds(bare, "tool_speed")
+    assert tipped.max_tool_speed == pytest.approx(0.375, rel=1e-9)
+    assert kinds(tipped, "tool_speed") and not kinds(tipped, "joint_speed")

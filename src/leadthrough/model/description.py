@@ -216,6 +216,8 @@ class RobotDescription:
         joints: The joints from the base (joint 1) to the flange.
         base: Pose of the base frame (DH frame 0, or the chain root) in the world.
         flange: Flange frame in the last link frame (identity: the last DH frame).
+        tcp: Tool centre point in the flange frame (identity: the flange itself); the tool
+            speed limit, the virtual constraints and the tool wrench act there.
         gravity: Gravity acceleration in the world frame [m/s²].
         home_position: Joint readings of the home pose [rad], inside the limits
             (default: zero, clipped into the limits).
@@ -225,6 +227,7 @@ class RobotDescription:
     joints: tuple[Joint, ...]
     base: Placement = field(default_factory=Placement)
     flange: Placement = field(default_factory=Placement)
+    tcp: Placement = field(default_factory=Placement)
     gravity: FloatArray = field(default_factory=lambda: np.array([0.0, 0.0, -9.81]))
     home_position: FloatArray | None = None
 

@@ -12,21 +12,20 @@ class (see the friction model).
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from leadthrough.errors import InputShapeError
 from leadthrough.model.description import FloatArray, RobotDescription
-from leadthrough.model.pinocchio_model import FLANGE_FRAME, build_model
+from leadthrough.model.pinocchio_model import FLANGE_FRAME, TCP_FRAME, build_model
+from leadthrough.model.snapshot import ModelSnapshot
 
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
 class Dynamics:
-    """Gravity, mass matrix, Coriolis, momentum and flange kinematics of one arm.
+    """Gravity, mass matrix, Coriolis, momentum, flange and tool kinematics of one arm.
 
     Built once from a description; each call costs a few microseconds. Not
     thread-safe: it owns one Pinocchio ``Data`` (make one ``Dynamics`` per thread).
@@ -42,38 +41,34 @@ class Dynamics:
         self.data = self.model.createData()
         self.n = robot.n_joints
         self._flange = self.model.getFrameId(FLANGE_FRAME)
+        self._tcp = self.model.getFrameId(TCP_FRAME)
         self._upper_triangle = np.triu(np.ones((self.n, self.n), dtype=bool))
-        self._last: dict[str, tuple[bytes, FloatArray]] = {}
+
+    def snapshot(self, q: ArrayLike, qd: ArrayLike) -> ModelSnapshot:
+        """Everything a control period needs of the model at (q [rad], q̇ [rad/s]), once.
+
+        G(q), M(q), Cᵀ(q, q̇) q̇, the TCP Jacobian and pose (see :class:`ModelSnapshot`).
+        """
+        q, qd = self._vector(q, "q").copy(), self._vector(qd, "qd").copy()
+        model, data = self.model, self.data
+        gravity = pin.computeGeneralizedGravity(model, data, q).copy()
+        mass = self._mass(q)
+        drift = pin.computeCoriolisMatrix(model, data, q, qd).T @ qd
+        jacobian = pin.computeFrameJacobian(model, data, q, self._tcp, _WORLD_ALIGNED)
+        pose = pin.updateFramePlacement(model, data, self._tcp).homogeneous.copy()
+        return ModelSnapshot(q, qd, gravity, mass, drift, jacobian, pose)
 
     def gravity(self, q: ArrayLike) -> FloatArray:
         """Gravity torque G(q) [Nm], shape (n,): the torque that holds the arm still."""
-        return self._remembered("gravity", self._vector(q, "q"), self._gravity)
+        return pin.computeGeneralizedGravity(self.model, self.data, self._vector(q, "q")).copy()
 
     def mass(self, q: ArrayLike) -> FloatArray:
         """Joint-space inertia matrix M(q) [kg m²], (n, n), rotor inertias included."""
-        return self._remembered("mass", self._vector(q, "q"), self._mass)
-
-    def _gravity(self, q: FloatArray) -> FloatArray:
-        return pin.computeGeneralizedGravity(self.model, self.data, q).copy()
+        return self._mass(self._vector(q, "q"))
 
     def _mass(self, q: FloatArray) -> FloatArray:
         upper = pin.crba(self.model, self.data, q)
         return np.where(self._upper_triangle, upper, upper.T)
-
-    def _remembered(
-        self, name: str, q: FloatArray, compute: Callable[[FloatArray], FloatArray]
-    ) -> FloatArray:
-        """``compute(q)``, reused while ``q`` is unchanged; always a fresh copy.
-
-        Several components of one control step (feed-forward, observer, admittance,
-        supervisor) ask for G and M at the same q: it is computed once.
-        """
-        key = q.tobytes()
-        last = self._last.get(name)
-        if last is None or last[0] != key:
-            last = (key, compute(q))
-            self._last[name] = last
-        return last[1].copy()
 
     def coriolis(self, q: ArrayLike, qd: ArrayLike) -> FloatArray:
         """Coriolis/centrifugal matrix C(q, q̇) [kg m²/s], (n, n), Christoffel form."""
@@ -113,6 +108,18 @@ class Dynamics:
         q = self._vector(q, "q")
         return pin.updateFramePlacement(
             self.model, self._forward_kinematics(q), self._flange
+        ).homogeneous.copy()
+
+    def tool_jacobian(self, q: ArrayLike) -> FloatArray:
+        """Jacobian of the tool centre point (``robot.tcp``), (6, n), as :meth:`jacobian`."""
+        q = self._vector(q, "q")
+        return pin.computeFrameJacobian(self.model, self.data, q, self._tcp, _WORLD_ALIGNED)
+
+    def tool_pose(self, q: ArrayLike) -> FloatArray:
+        """Pose of the tool centre point in the world frame, 4×4 homogeneous [m]."""
+        q = self._vector(q, "q")
+        return pin.updateFramePlacement(
+            self.model, self._forward_kinematics(q), self._tcp
         ).homogeneous.copy()
 
     def _forward_kinematics(self, q: FloatArray) -> pin.Data:

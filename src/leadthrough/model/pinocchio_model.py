@@ -9,6 +9,7 @@ from leadthrough.model.chain import serial_chain
 from leadthrough.model.description import FloatArray, RobotDescription
 
 FLANGE_FRAME = "flange"
+TCP_FRAME = "tcp"
 
 _AXIS_JOINTS = {0: pin.JointModelRX, 1: pin.JointModelRY, 2: pin.JointModelRZ}
 
@@ -26,7 +27,8 @@ def build_model(robot: RobotDescription) -> pin.Model:
 
     Link inertials go to their joints, the reflected rotor inertia ``G_r² J_m`` becomes
     the joint armature (so it lands on the diagonal of M), limits and gravity are
-    copied, and frames ``link_1`` … ``link_n`` and ``flange`` are added.
+    copied, and frames ``link_1`` … ``link_n``, ``flange`` and ``tcp`` (the tool centre
+    point, ``robot.tcp`` in the flange frame) are added.
     """
     chain = serial_chain(robot)
     model = pin.Model()
@@ -44,6 +46,8 @@ def build_model(robot: RobotDescription) -> pin.Model:
         parent = joint_id
     flange = pin.SE3(chain.flange_in_last_joint)
     model.addFrame(pin.Frame(FLANGE_FRAME, parent, flange, pin.FrameType.OP_FRAME))
+    tcp = flange * pin.SE3(robot.tcp.homogeneous)
+    model.addFrame(pin.Frame(TCP_FRAME, parent, tcp, pin.FrameType.OP_FRAME))
     model.armature = robot.reflected_rotor_inertias.copy()
     model.lowerPositionLimit = robot.q_min.copy()
     model.upperPositionLimit = robot.q_max.copy()

@@ -7,8 +7,8 @@ Every controller sends its torque through one :class:`SafetySupervisor`, once pe
     tau = supervisor.command(t, q, qd, tau_desired)   # always finite, within the limits
 
 It saturates the torque, brakes joints above their speed limit and, while teaching, a
-tool above 250 mm/s (ISO 10218-1 reduced speed), adds soft walls inside the position
-limits, and latches a FAULT on non-finite, frozen or out-of-range sensor data or a
+tool centre point (TCP) above 250 mm/s (ISO 10218-1 reduced speed), adds soft walls inside
+the position limits, and latches a FAULT on non-finite, frozen or out-of-range sensor data or a
 non-finite command: then the safe stop (gravity hold with damping, then gravity hold
 alone, no feedback) until ``reset()``. No exception escapes ``check`` or ``command``.
 Messages number the joints from 1 at the base.
@@ -33,6 +33,7 @@ from numpy.typing import ArrayLike, NDArray
 from leadthrough.errors import ParameterError
 from leadthrough.model.description import FloatArray
 from leadthrough.model.dynamics import Dynamics
+from leadthrough.model.snapshot import ModelSnapshot
 from leadthrough.safety import braking
 from leadthrough.safety.checks import (
     FrozenEncoders,
@@ -61,7 +62,8 @@ class SafetyEvent:
     Attributes:
         t: Time of the control period it happened in [s].
         kind: ``"fault"``, ``"tool_speed"``, ``"joint_speed"``, ``"soft_limit"``, ``"calibration"``,
-            ``"overrun"``, ``"reset"`` or ``"mode"``.
+            ``"overrun"``, ``"reset"``, ``"mode"`` or ``"safe_stop_failed"`` (the safe stop
+            itself could not be computed or sent).
         detail: One line saying what happened, with the joint and the value.
     """
 
@@ -78,10 +80,11 @@ class SafetySupervisor:
         fault_reason: Why the latched fault happened (the first reason), else None.
         events: Log of what happened, one entry per episode (not per period).
         overruns: Number of control periods that missed their deadline.
-        max_tool_speed: Largest flange speed seen while teaching [m/s].
+        max_tool_speed: Largest TCP speed seen while teaching [m/s].
 
     Args:
-        dynamics: Model of the arm (limits, M(q), G(q), flange Jacobian).
+        dynamics: Model of the arm (limits, M(q), G(q), TCP Jacobian); replace it with
+            :meth:`use_model`, which keeps ``robot`` and the bounds in step.
         dt: Control period [s].
         parameters: Safety settings (read once, here, with the robot's limits).
     """
@@ -89,12 +92,10 @@ class SafetySupervisor:
     def __init__(
         self, dynamics: Dynamics, dt: float = 0.004, parameters: SafetyParameters | None = None
     ) -> None:
-        self.dynamics = dynamics
-        self.robot = dynamics.robot
         self.n = dynamics.n
         self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
         self.parameters = parameters or SafetyParameters()
-        self._limits = SafetyLimits.of(self.robot, self.parameters)
+        self.use_model(dynamics)
         self._encoders = FrozenEncoders(self.n, self.parameters.stale_periods)
         self.state = SupervisorState.HOLDING
         self.fault_reason: str | None = None
@@ -107,6 +108,20 @@ class SafetySupervisor:
         self._in_overrun = False
         self._clear_episodes()
 
+    def use_model(self, dynamics: Dynamics) -> None:
+        """Supervise with the model ``dynamics`` from now on (e.g. after a payload).
+
+        ``robot``, ``dynamics`` and the bounds always describe the same arm.
+
+        Raises:
+            ParameterError: ``dynamics`` has another number of joints.
+        """
+        if dynamics.n != self.n:
+            raise ParameterError("dynamics", f"has {dynamics.n} joints, the supervisor {self.n}")
+        self.dynamics = dynamics
+        self.robot = dynamics.robot
+        self._limits = SafetyLimits.of(self.robot, self.parameters)
+
     def teach(self) -> None:
         """Switch to TEACHING (tool speed limited); ignored while in FAULT."""
         self._set_mode(SupervisorState.TEACHING)
@@ -115,12 +130,24 @@ class SafetySupervisor:
         """Switch to HOLDING; ignored while in FAULT."""
         self._set_mode(SupervisorState.HOLDING)
 
-    def stop(self, reason: str) -> None:
+    def stop(self, reason: str, t: float | None = None) -> None:
         """Latch FAULT with ``reason`` from outside (Ctrl-C, a robot error): the safe stop.
 
         From the next :meth:`command` on, the arm gets the safe stop until :meth:`reset`.
+
+        Args:
+            reason: One line saying what happened.
+            t: Time of the sample the fault belongs to [s], on the robot's clock; default
+                the time of the latest sample seen. The damped phase of the safe stop
+                counts from it.
         """
+        if t is not None:
+            self._t = float(t)
         self._fault(reason)
+
+    def log(self, kind: str, detail: str, t: float | None = None) -> None:
+        """Add an event from outside (e.g. the control loop's), at ``t`` [s] or the latest."""
+        self.events.append(SafetyEvent(self._t if t is None else float(t), kind, detail))
 
     def reset(self) -> None:
         """Clear a latched fault and go to HOLDING; frozen-encoder counters restart."""
@@ -157,7 +184,14 @@ class SafetySupervisor:
         self._q_last_good = position
         return self.state is not SupervisorState.FAULT
 
-    def command(self, t: float, q: ArrayLike, qd: ArrayLike, tau_desired: ArrayLike) -> FloatArray:
+    def command(
+        self,
+        t: float,
+        q: ArrayLike,
+        qd: ArrayLike,
+        tau_desired: ArrayLike,
+        model: ModelSnapshot | None = None,
+    ) -> FloatArray:
         """The torque actually sent to the motors [Nm], arm side, shape (n,).
 
         Always finite and within ± the torque limits: the safe stop in FAULT, else the
@@ -168,11 +202,13 @@ class SafetySupervisor:
             q: Joint readings [rad], shape (n,).
             qd: Joint velocities [rad/s], shape (n,).
             tau_desired: The controller's torque [Nm], shape (n,).
+            model: The model at (q, q̇) computed this period (``dynamics.snapshot``), if
+                the caller has it; else it is computed here.
         """
         try:
             self._t = float(t)
             if self.state is not SupervisorState.FAULT:
-                tau = self._supervised(floats(q), floats(qd), floats(tau_desired))
+                tau = self._supervised(floats(q), floats(qd), floats(tau_desired), model)
                 if tau is not None:
                     return tau
         except Exception as error:  # nothing may escape on the motor path
@@ -195,23 +231,25 @@ class SafetySupervisor:
         self._in_overrun = overrun
 
     def _supervised(
-        self, q: FloatArray, qd: FloatArray, tau_desired: FloatArray
+        self, q: FloatArray, qd: FloatArray, tau_desired: FloatArray, model: ModelSnapshot | None
     ) -> FloatArray | None:
         """The supervised torque [Nm], or None after latching a fault (bad input or torque)."""
         if self._input_problem(q, qd, tau_desired) is not None:
             return None
         self._q_last_good = q
-        mass = self.dynamics.mass(q)
+        if model is None:
+            model = self.dynamics.snapshot(q, qd)
+        mass = model.mass
         inertia = mass.diagonal()
         tau = self._limits.saturated(tau_desired)  # a huge command cannot swamp the safety
         braking_torque = self._joint_braking(qd, inertia)
         if self.state is SupervisorState.TEACHING:
-            braking_torque = braking_torque + self._tool_braking(q, qd, mass)
+            braking_torque = braking_torque + self._tool_braking(model.tool_jacobian, qd, mass)
         braked = braking_torque != 0.0
         if braked.any():
             # while braking, the brakes win: the controller's torque on a braked joint is
             # replaced by gravity compensation, so no controller can push through the limit
-            tau = np.where(braked, self.dynamics.gravity(q), tau)
+            tau = np.where(braked, model.gravity, tau)
         tau += self._walls(q, qd, inertia) + braking_torque
         if not np.isfinite(tau).all():
             self._fault("non-finite safety torque")
@@ -240,11 +278,13 @@ class SafetySupervisor:
             self._log("joint_speed", f"{detail}: braking")
         return torque
 
-    def _tool_braking(self, q: FloatArray, qd: FloatArray, mass: FloatArray) -> FloatArray:
-        """Tool braking torque [Nm] (see :func:`.braking.tool_braking`), logging each episode."""
+    def _tool_braking(self, jacobian: FloatArray, qd: FloatArray, mass: FloatArray) -> FloatArray:
+        """Tool braking torque [Nm] (see :func:`.braking.tool_braking`), logging each episode.
+
+        ``jacobian`` is the TCP's (6, n): the tool tip, not the flange, is limited.
+        """
         p = self.parameters
         limit = p.tool_speed_limit
-        jacobian = self.dynamics.jacobian(q)
         torque, speed = braking.tool_braking(jacobian, mass, qd, limit, p.braking_time)
         self.max_tool_speed = max(self.max_tool_speed, speed)
         if self._began("tool_speed", speed > limit):
@@ -262,7 +302,10 @@ class SafetySupervisor:
             velocity = trusted_velocity(qd, self._limits.qd_bound, frozen) if damped else None
             hold = braking.safe_stop(self.dynamics, self._q_last_good, velocity, p.braking_time)
             return self._limits.saturated(hold)
-        except Exception:  # the last resort must return a torque
+        except Exception as error:  # the last resort must return a torque: zero, and say so
+            if self._began("safe_stop_failed", True):
+                self._log("safe_stop_failed", f"safe stop failed ({type(error).__name__}: "
+                          f"{error}): zero torque sent")  # fmt: skip
             return np.zeros(self.n)
 
     def _sample_problem(self, q: FloatArray, qd: FloatArray, tau: FloatArray | None) -> str | None:

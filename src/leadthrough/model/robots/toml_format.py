@@ -10,6 +10,8 @@ Layout (every length in m, angle in rad, torque in Nm, arm side)::
     rotation = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]
     [flange]                             # optional, in the last link frame
     xyz = [0.0, 0.0, 0.0]
+    [tcp]                                # optional tool centre point, in the flange frame
+    xyz = [0.0, 0.0, 0.15]
 
     [[joints]]
     name = "joint_1"
@@ -79,9 +81,8 @@ def load_robot(path: str | Path) -> RobotDescription:
 
 def robot_from_dict(data: Mapping[str, Any]) -> RobotDescription:
     """Build a RobotDescription from the parsed TOML layout of this module."""
-    table = _keys(
-        data, "", required={"name", "joints"}, optional={"gravity", "base", "flange", "home"}
-    )
+    optional = {"gravity", "base", "flange", "tcp", "home"}
+    table = _keys(data, "", required={"name", "joints"}, optional=optional)
     joints_data = table["joints"]
     if not isinstance(joints_data, list) or not joints_data:
         raise fail("joints", "expected a non-empty array of [[joints]] tables")
@@ -90,7 +91,7 @@ def robot_from_dict(data: Mapping[str, Any]) -> RobotDescription:
         with within(f"joints[{index}]"):
             joints.append(_joint(joint_data))
     kwargs: dict[str, Any] = {}
-    for name in ("base", "flange"):
+    for name in ("base", "flange", "tcp"):
         if name in table:
             with within(name):
                 kwargs[name] = _placement(table[name], optional={"xyz"})
@@ -113,6 +114,7 @@ def robot_to_dict(robot: RobotDescription) -> dict[str, Any]:
         table["home"] = robot.home_position.tolist()
     table["base"] = _placement_dict(robot.base)
     table["flange"] = _placement_dict(robot.flange)
+    table["tcp"] = _placement_dict(robot.tcp)
     table["joints"] = [_joint_dict(joint) for joint in robot.joints]
     return table
 
