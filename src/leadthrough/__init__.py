@@ -16,6 +16,8 @@ from leadthrough.errors import (
     ParameterError,
     RobotDescriptionError,
 )
+from leadthrough.estimation.contacts import ContactEvent, ContactParameters
+from leadthrough.estimation.log_observer import detect_contacts
 from leadthrough.estimation.observer import MomentumObserver, ObserverParameters
 from leadthrough.friction.identification import FitReport, identify_friction
 from leadthrough.friction.model import FrictionModel
@@ -37,6 +39,8 @@ from leadthrough.runtime.readers import read_log
 __version__ = "0.1.0"
 
 __all__ = [
+    "ContactEvent",
+    "ContactParameters",
     "DHParameters",
     "Dynamics",
     "FitReport",
@@ -59,6 +63,7 @@ __all__ = [
     "RobotDescriptionError",
     "__version__",
     "control_loop",
+    "detect_contacts",
     "identify_friction",
     "read_log",
     "robots",

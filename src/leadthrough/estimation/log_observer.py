@@ -1,0 +1,269 @@
+"""The momentum observer run over a recorded log, with the model's torque uncertainty.
+
+:func:`observe_log` replays a :class:`~leadthrough.logs.log.JointLog` through
+:class:`~leadthrough.estimation.observer.MomentumObserver` at the log's own rate and
+:func:`detect_contacts` runs the online :class:`ContactDetector` on the result.
+
+Irregular time stamps (real logs jitter by tens of percent) are handled by resampling
+q, q̇ and τ linearly onto a uniform grid at the log's median period, the rate the
+observer runs at; the result and the events are in the log's own time base.
+
+The observer's std covers the friction it models as noise; a real arm's model is also
+wrong in ways that are not white noise (link inertials, drive gains, friction levels).
+That **model uncertainty** is added to the observer's std, per joint and sample::
+
+    σ_model² = (ε_rb |τ_rb|)² + (ε_f |τ_f|)²,     σ² = σ_observer² + σ_model²
+
+with τ_rb = τ − τ_f + τ̂_ext the rigid-body torque the model must explain, τ_f the
+friction model's mean, ε_rb the relative rigid-body model error and ε_f the friction
+model's relative error. Because the observer low-passes model errors, σ_model is held
+at its recent peak and decays with the time constant ``hold_time``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from leadthrough.errors import LeadthroughError, ParameterError
+from leadthrough.estimation.contacts import ContactDetector, ContactEvent, ContactParameters
+from leadthrough.estimation.observer import MomentumObserver, ObserverParameters
+from leadthrough.friction.model import FrictionModel
+from leadthrough.logs.log import JointLog
+from leadthrough.model.description import FloatArray, RobotDescription
+from leadthrough.model.dynamics import Dynamics
+from leadthrough.validation import real
+
+
+class LogInputError(LeadthroughError, ValueError):
+    """A log cannot be observed (no torque and no current, too short, wrong joint count)."""
+
+
+@dataclass(frozen=True)
+class ModelUncertainty:
+    """How wrong the model may be, as a std added to the observer's (module docstring).
+
+    Attributes:
+        rigid_body: ε_rb, relative error of the rigid-body torque [–] (0.1: a model not
+            identified on this arm; an identified one is nearer 0.05).
+        friction: ε_f, relative error of the friction torque [–]; None takes the
+            friction model's ``relative_error``.
+        hold_time: Decay time of the held peak of σ_model [s].
+    """
+
+    rigid_body: float = 0.1
+    friction: float | None = None
+    hold_time: float = 1.0
+    friction_hold_time: float = 1.0
+    stop_hold_time: float = 3.0
+
+    def __post_init__(self) -> None:
+        real("rigid_body", self.rigid_body, minimum=0.0, error=ParameterError)
+        if self.friction is not None:
+            real("friction", self.friction, minimum=0.0, error=ParameterError)
+        real("hold_time", self.hold_time, minimum=0.0, error=ParameterError)
+        real("friction_hold_time", self.friction_hold_time, minimum=0.0, error=ParameterError)
+        real("stop_hold_time", self.stop_hold_time, minimum=0.0, error=ParameterError)
+
+
+@dataclass(frozen=True, eq=False)
+class ObservedLog:
+    """The observer's output over a log, on the uniform grid it ran on.
+
+    Attributes:
+        t: Sample times [s], uniform at the log's median period, log's time base.
+        q: Joint readings [rad], (N, n), interpolated.
+        qd: Joint velocities [rad/s], (N, n), interpolated.
+        tau: Measured joint torque, arm side [Nm], (N, n) (K·i for current logs).
+        tau_ext: Estimated external torque [Nm], (N, n), SPEC §1 sign.
+        std_observer: The observer's own std of ``tau_ext`` [Nm], (N, n).
+        std_model: Model uncertainty σ_model [Nm], (N, n).
+        source: The log's source.
+    """
+
+    t: FloatArray
+    q: FloatArray
+    qd: FloatArray
+    tau: FloatArray
+    tau_ext: FloatArray
+    std_observer: FloatArray
+    std_model: FloatArray
+    source: str = ""
+
+    @property
+    def std(self) -> FloatArray:
+        """Total std of ``tau_ext``: observer and model combined [Nm], (N, n)."""
+        return np.hypot(self.std_observer, self.std_model)
+
+    @property
+    def dt(self) -> float:
+        """The period the observer ran at [s]."""
+        return float(self.t[1] - self.t[0])
+
+
+def measured_torque(log: JointLog, robot: RobotDescription) -> FloatArray:
+    """The log's joint torque, arm side [Nm]: ``log.tau``, else K·i from its currents.
+
+    Raises:
+        LogInputError: The log has neither, or currents and the robot no torque constants.
+    """
+    where = log.source or "log"
+    if log.n_joints != robot.n_joints:
+        raise LogInputError(f"{where}: {log.n_joints} joints, but {robot.name} has "
+                            f"{robot.n_joints}")  # fmt: skip
+    if log.tau is not None:
+        return np.asarray(log.tau, dtype=float)
+    constants = robot.torque_constants
+    if log.current is None:
+        raise LogInputError(f"{where}: the log has neither joint torques nor motor currents")
+    if constants is None:
+        raise LogInputError(f"{where}: the log has motor currents but {robot.name} has "
+                            "no torque constants (Joint.torque_constant) for τ = K·i")  # fmt: skip
+    return np.asarray(log.current, dtype=float) * constants
+
+
+def resample(log: JointLog, torque: FloatArray) -> tuple[FloatArray, ...]:
+    """(t, q, q̇, τ) linearly interpolated onto a uniform grid at the median period."""
+    if log.n_samples < 3:
+        raise LogInputError(f"{log.source or 'log'}: {log.n_samples} samples, need at least 3")
+    period = log.median_period
+    t = log.t[0] + period * np.arange(int(np.floor(log.duration / period + 1e-9)) + 1)
+
+    def interpolate(values: FloatArray) -> FloatArray:
+        return np.column_stack([np.interp(t, log.t, column) for column in values.T])
+
+    return t, interpolate(log.q), interpolate(log.qd), interpolate(torque)
+
+
+def observe_log(
+    log: JointLog,
+    robot: RobotDescription,
+    friction: FrictionModel | None = None,
+    uncertainty: ModelUncertainty | None = None,
+    observer: ObserverParameters | None = None,
+) -> ObservedLog:
+    """Run the momentum observer over a log at its own rate.
+
+    Args:
+        log: The run (``tau``, or ``current`` and the robot's torque constants).
+        robot: The arm's model (nominal or identified).
+        friction: Its friction model; None takes the robot's.
+        uncertainty: The model uncertainty added to the observer's std.
+        observer: Observer tuning (default: the thesis' values).
+
+    Raises:
+        LogInputError: No torque in the log, a joint count that does not match, too short.
+    """
+    torque = measured_torque(log, robot)
+    t, q, qd, tau = resample(log, torque)
+    friction = friction or FrictionModel.from_robot(robot)
+    uncertainty = uncertainty or ModelUncertainty()
+    estimator = MomentumObserver(Dynamics(robot), friction, dt=float(t[1] - t[0]),
+                                 parameters=observer)  # fmt: skip
+    tau_ext, std_observer = np.zeros_like(q), np.zeros_like(q)
+    for k in range(t.size):
+        tau_ext[k] = estimator.update(q[k], qd[k], tau[k])
+        std_observer[k] = estimator.std
+    friction_mean = friction.mean(qd, q)
+    relative = friction.relative_error if uncertainty.friction is None else uncertainty.friction
+    dt = float(t[1] - t[0])
+    rigid = held_peak(
+        uncertainty.rigid_body * np.abs(tau - friction_mean + tau_ext), dt, uncertainty.hold_time
+    )
+    sliding = held_peak(relative * np.abs(friction_mean), dt, uncertainty.friction_hold_time)
+    stopped = stop_memory(friction_mean, qd, q[0], friction, dt, uncertainty.stop_hold_time)
+    # the observer starts from τ̂ = 0 in an unknown friction state: τ_C while it converges
+    start = np.outer(np.exp(-(t - t[0]) / max(uncertainty.hold_time, dt)),
+                     friction.coulomb_level(q[0]))  # fmt: skip
+    std_model = np.sqrt(rigid**2 + sliding**2 + stopped**2 + start**2)
+    return ObservedLog(t, q, qd, tau, tau_ext, std_observer, std_model, log.source)
+
+
+def held_peak(values: FloatArray, dt: float, hold_time: float) -> FloatArray:
+    """Running peak of ``values`` (N, n) that decays as exp(−t / hold_time) [same units]."""
+    decay = float(np.exp(-dt / hold_time)) if hold_time > 0 else 0.0
+    held = values.copy()
+    for k in range(1, held.shape[0]):
+        np.maximum(held[k], decay * held[k - 1], out=held[k])
+    return held
+
+
+def stop_memory(
+    friction_mean: FloatArray,
+    qd: FloatArray,
+    position: FloatArray,
+    friction: FrictionModel,
+    dt: float,
+    hold: float,
+) -> FloatArray:
+    """Per sample, the friction a joint at rest may still hold since it last slid [Nm].
+
+    A joint that stops keeps an unknown static friction, often near the sliding level it
+    had; the friction model says 0 at rest. So at rest the last sliding |τ_f| is kept as
+    an uncertainty, decaying as exp(−t / hold); while the joint slides it is 0. At the
+    start of the data the static friction is unknown: the Coulomb level τ_C(q).
+    """
+    sliding = np.abs(qd) > friction.half_width + 5.0 / friction.slope
+    decay = float(np.exp(-dt / hold)) if hold > 0 else 0.0
+    memory = np.zeros_like(friction_mean)
+    last = np.array(friction.coulomb_level(position), dtype=float)
+    for k in range(friction_mean.shape[0]):
+        last = np.where(sliding[k], np.abs(friction_mean[k]), decay * last)
+        memory[k] = np.where(sliding[k], 0.0, last)
+    return memory
+
+
+def run_detector(
+    observed: ObservedLog, parameters: ContactParameters | None = None
+) -> list[ContactEvent]:
+    """The online contact detector fed with an observed log, period by period."""
+    detector = ContactDetector(observed.tau_ext.shape[1], parameters)
+    std = observed.std
+    for k in range(observed.t.size):
+        detector.update(float(observed.t[k]), observed.tau_ext[k], std[k])
+    detector.finish()
+    return list(detector.events)
+
+
+def detect_contacts(
+    log: JointLog,
+    robot: RobotDescription,
+    friction: FrictionModel | None = None,
+    parameters: ContactParameters | None = None,
+    uncertainty: ModelUncertainty | None = None,
+) -> list[ContactEvent]:
+    """Contacts in a log: the momentum observer at the log's rate, then the detector.
+
+    Args:
+        log: The run (``tau``, or ``current`` and the robot's torque constants).
+        robot: The arm's model: nominal (``lt.robots.ur10e()``) or identified.
+        friction: Its friction model; None takes the robot's.
+        parameters: Detector thresholds (see :class:`ContactParameters`).
+        uncertainty: Model uncertainty added to the observer's std.
+
+    Returns:
+        The events, in time order, each with start and end [s] in the log's time base,
+        the joints (0-based) and the peak estimated torque per joint [Nm].
+
+    Raises:
+        LogInputError: No torque in the log, a joint count that does not match, too short.
+    """
+    return run_detector(observe_log(log, robot, friction, uncertainty), parameters)
+
+
+def false_alarm_table(
+    observed: Sequence[ObservedLog], sigmas: float = 2.0
+) -> dict[str, FloatArray]:
+    """False-alarm level per joint over runs where nothing touches the arm.
+
+    Returns:
+        ``rms`` and ``peak`` of τ̂_ext [Nm], ``median_std`` [Nm] and ``exceed``, the
+        fraction of samples with |τ̂_ext| > ``sigmas`` std [–], each shape (n,).
+    """
+    tau = np.concatenate([o.tau_ext for o in observed])
+    std = np.concatenate([o.std for o in observed])
+    return {"rms": np.sqrt(np.mean(tau**2, axis=0)), "peak": np.max(np.abs(tau), axis=0),
+            "median_std": np.median(std, axis=0),
+            "exceed": np.mean(np.abs(tau) > sigmas * std, axis=0)}  # fmt: skip
