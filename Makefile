@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: demo test bench lint format clean
+.PHONY: demo test bench docs lint format clean
 
 $(STAMP): pyproject.toml
 	@# Offscreen rendering of the twin needs EGL (Debian: libegl1, libgl1-mesa-dri).
@@ -32,6 +32,10 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/effort_limits.py
 	$(BIN)/python benchmarks/effort_plants.py
 	$(BIN)/python benchmarks/guiding_quality.py
+
+# Every figure, table and number the README shows, from seeded runs (a few minutes).
+docs: $(STAMP)
+	MUJOCO_GL=$${MUJOCO_GL:-egl} $(BIN)/python -m leadthrough.experiments.docs
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

@@ -45,7 +45,7 @@ def test_dither_lowers_breakaway_and_shortens_the_blind_spot(yumi, realistic_fri
     """With dithering a joint starts under a smaller push, and the push is seen sooner."""
     result = breakaway_with_and_without_dither(yumi, realistic_friction, joint=joint)
     assert result.ratio < 0.85, result.breakaway
-    assert result.detection_delay["dither"] < 0.5 * result.detection_delay["no_dither"]
+    assert 0.0 <= result.detection_delay["dither"] < 0.5 * result.detection_delay["no_dither"]
 
 
 def test_dither_alone_does_not_move_the_arm(yumi, realistic_friction):

@@ -236,7 +236,8 @@ def breakaway_with_and_without_dither(
         runs[key] = run
         angle = run.simulation.q_true[:, joint]
         breakaway[key] = float(truth[_first(np.abs(angle - angle[0]) > 1e-3)])
-        delay[key] = float(t[_first(estimate >= 0.5 * coulomb)] - t[_first(truth >= 0.5 * coulomb)])
+        half = t[_first(truth >= 0.5 * coulomb)]  # an estimate's start-up transient is no push
+        delay[key] = float(t[_first((estimate >= 0.5 * coulomb) & (t >= half))] - half)
     return BreakawayResult(runs, breakaway, delay)
 
 

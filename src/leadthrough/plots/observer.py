@@ -59,13 +59,17 @@ def plot_breakaway(result: BreakawayResult) -> Figure:
 
 
 def plot_dither_sweep(sweep: DitherSweep) -> Figure:
-    """Figs. 5.3–5.4: velocity noise and tool vibration against dither frequency."""
+    """Figs. 5.3–5.4: velocity noise and tool vibration against dither frequency.
+
+    The vibration is the thesis' 6-norm (eq. 5.21) of the flange's linear acceleration
+    [m/s²] and the wrist joints' angular accelerations [rad/s²], mixed as there.
+    """
     plt = pyplot()
     figure, (left, right) = plt.subplots(1, 2, figsize=(11, 4), constrained_layout=True)
     left.plot(sweep.frequencies, sweep.velocity_noise * 1e3, "o-")
     left.set_ylabel("RMS joint velocity at rest [mrad/s]")
     right.plot(sweep.frequencies, sweep.tool_vibration, "o-", color="tab:red")
-    right.set_ylabel("RMS ‖a‖₆ of the flange (eq. 5.21)")
+    right.set_ylabel("RMS ‖a‖₆, eq. 5.21 [m/s² and rad/s², mixed]")
     for axis in (left, right):
         axis.set_xlabel("dither frequency [Hz]")
         axis.grid(alpha=0.3)
