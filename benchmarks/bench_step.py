@@ -22,7 +22,7 @@ def main() -> None:
     omega = 2.0 * np.pi * 0.2  # every joint swings ±0.1 rad at 0.2 Hz: teaching, never a fault
     results = {}
     for mode in ("passive", "active"):
-        controller = lt.LeadThrough(robot, mode)
+        controller = lt.LeadThrough(robot, mode, calibrate=True)
         state = {"k": 0}
 
         def step(controller: lt.LeadThrough = controller, state: dict = state) -> None:

@@ -63,7 +63,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument(
         "--factory",
         help="module:function building the active controller "
-        "from (robot, mode); default lt.LeadThrough(robot, mode=mode, dt=0.004)",
+        "from (robot, mode); default lt.LeadThrough(robot, mode=mode, dt=0.004, calibrate=True)",
     )
     args = parser.parse_args(argv)
     factory = None

@@ -29,7 +29,7 @@ def yumi() -> lt.RobotDescription:
 def calibrated(yumi, config, friction=None, seconds=1.5):
     """A controller that calibrated on a twin nobody touches, and the run."""
     twin = DigitalTwin(yumi, config)
-    controller = LeadThrough(yumi, friction=friction)
+    controller = LeadThrough(yumi, friction=friction, calibrate=True)
     return controller, twin, simulate(twin, controller, seconds)
 
 
@@ -54,11 +54,11 @@ def test_unknown_payload_is_found_and_held(yumi):
     controller, _twin, sim = calibrated(yumi, config, seconds=6.0)
     assert controller.calibration.payload == pytest.approx(0.5, rel=0.1)
     logged = [e.detail for e in controller.supervisor.events if e.kind == "calibration"]
-    assert len(logged) == 1 and logged[0].startswith("calibrated: payload 0.5")
+    assert len(logged) == 1 and logged[0].startswith("calibrated: payload 0.")
     settled = sim.t > 1.5
     assert np.max(np.abs(sim.q_true[settled] - sim.q_true[settled][0])) < 1e-3
     # the same arm without the calibration sags under the payload
-    blind = LeadThrough(yumi, parameters=LeadThroughParameters(calibration=None))
+    blind = LeadThrough(yumi)
     sagging = simulate(DigitalTwin(yumi, config), blind, 6.0)
     assert np.max(np.abs(sagging.q_true[-1] - sagging.q_true[0])) > 0.05
 
@@ -67,7 +67,7 @@ def test_touching_the_arm_during_calibration_refuses_it_and_never_faults(yumi):
     """A push during the calibration: refused at once with a one-line reason, guiding goes on."""
     start = lt.Dynamics(yumi).pose(yumi.home())[:3, 3]
     hand = Hand(MinimumJerk(start, start + np.array([0.0, 0.1, 0.0]), duration=0.5))
-    controller = LeadThrough(yumi)
+    controller = LeadThrough(yumi, calibrate=True)
     simulate(DigitalTwin(yumi, operator=hand), controller, 1.5)
     result = controller.calibration
     assert not result.accepted and "touched" in result.reason and "\n" not in result.reason
@@ -97,7 +97,14 @@ def test_without_calibration_guiding_starts_at_once(yumi, tmp_path):
 
 @pytest.mark.parametrize(
     ("field", "value"),
-    [("stroke", 0.0), ("speed", -1.0), ("cycles", 0), ("cycles", 1.5), ("max_payload", 0.0)],
+    [
+        ("stroke", 0.0),
+        ("speed", -1.0),
+        ("cycles", 0),
+        ("cycles", 1.5),
+        ("max_payload", 0.0),
+        ("max_speed", 0.05),
+    ],
 )
 def test_bad_calibration_parameters_are_one_line_errors(field, value):
     """Each bad setting names itself."""

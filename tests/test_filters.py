@@ -107,3 +107,25 @@ def test_signal_does_not_modify_its_input():
 def test_empty_signal_gives_empty_output():
     """A signal with no samples filters to an empty array of the same shape."""
     assert low_pass_signal(np.zeros((0, 3))).shape == (0, 3)
+
+
+@pytest.mark.parametrize("dt", [0.004, 0.001, 0.0005])
+def test_the_time_constant_holds_at_any_rate(dt):
+    """Pole 0.6 at 250 Hz is τ = 7.8 ms; at 1 kHz the pole follows so a step still takes τ."""
+    from leadthrough.filters import TIME_CONSTANT, pole
+
+    assert abs(TIME_CONSTANT - 0.00783) < 1e-5
+    step = low_pass_signal(np.concatenate([[0.0], np.ones(round(0.1 / dt))]), pole(dt))
+    t = np.arange(len(step)) * dt
+    np.testing.assert_allclose(step, 1.0 - np.exp(-t / TIME_CONSTANT), atol=1e-12)
+
+
+def test_the_thesis_pole_and_invalid_periods():
+    """pole(4 ms) is the thesis' 0.6 exactly; a zero period is refused, τ = 0 filters nothing."""
+    from leadthrough.errors import ParameterError
+    from leadthrough.filters import pole
+
+    assert pole(0.004) == POLE
+    assert pole(0.004, 0.0) == 0.0
+    with pytest.raises(ParameterError, match="dt"):
+        pole(0.0)

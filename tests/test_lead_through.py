@@ -113,7 +113,7 @@ def test_random_pushes_up_to_100_newton_stay_within_limits(yumi, friction):
         hand = Hand(MinimumJerk(start, goal, duration=rng.uniform(0.3, 1.0)),
                     stiffness=2000.0, max_force=100.0)  # fmt: skip
         twin = DigitalTwin(yumi, operator=hand)
-        controller = LeadThrough(yumi, friction=friction)
+        controller = LeadThrough(yumi, friction=friction, calibrate=True)
         sim = simulate(twin, controller, 2.0)
         assert np.all(np.abs(sim.tau_command) <= yumi.torque_limits + 1e-9)
         assert controller.state is not SupervisorState.FAULT
@@ -156,7 +156,7 @@ def test_frozen_encoder_is_a_fault(yumi):
 def test_normal_guiding_never_faults(yumi, friction):
     """A guided path in both modes leaves the supervisor teaching (no hidden exception)."""
     for mode in ("passive", "active"):
-        controller = LeadThrough(yumi, mode, friction=friction)
+        controller = LeadThrough(yumi, mode, friction=friction, calibrate=True)
         twin = DigitalTwin(yumi, operator=Hand(MinimumJerk(*_line(yumi), duration=2.0)))
         simulate(twin, controller, 2.5)
         assert controller.state is SupervisorState.TEACHING, controller.supervisor.fault_reason
@@ -193,7 +193,7 @@ def test_virtual_constraint_holds_the_tool_against_a_pull(yumi, friction, kind):
     rises = {}
     for label, constraints in (("free", ()), ("constrained", (constraint[kind],))):
         hand = Hand(Line(start, start + np.array([0.0, 0.12, 0.08]), 2.5))
-        controller = LeadThrough(yumi, friction=friction, constraints=constraints)
+        controller = LeadThrough(yumi, friction=friction, constraints=constraints, calibrate=True)
         sim = simulate(DigitalTwin(yumi, operator=hand), controller, 3.0)
         rises[label] = np.max(sim.flange_position[:, 2] - start[2])
         assert sim.flange_position[-1, 1] - start[1] > 0.06  # it still slides along the plane

@@ -16,8 +16,8 @@ DATA = Path(lt.robots.__file__).parent / "data"
 
 #: Published numbers the drive data files must carry.
 UR10E_K = [10.0, 10.6956, 8.4566, 9.0029, 9.4800, 10.1232]  # Mamedov & Mikhel 2020 [Nm/A]
-GAZ_PHI1 = [0.54615, 0.87224, 0.64068, 1.2794, 0.83904, 0.30301, 0.56489]  # Table I [Nm]
-GAZ_PHI2 = [5.1181, 9.0657, 10.136, 5.5903, 8.3469, 17.133, 10.336]  # Table I [s/rad]
+GAZ_FC = [0.2450, 0.1523, 0.1827, 0.3591, 0.2669, 0.1658, 0.2109]  # Table III π_CLS [Nm]
+GAZ_FV = [0.0665, 0.1987, 0.0399, 0.2257, 0.1023, -0.0132, 0.0638]  # [Nm s/rad]
 
 
 def quietly(load, *args, **kwargs):
@@ -58,15 +58,13 @@ def test_ur10e_torque_constants_are_the_published_ones():
                                atol=1e-4)  # fmt: skip
 
 
-def test_panda_friction_is_gaz_table_one_with_phi3_zero():
-    """Panda: our mean friction equals Gaz et al.'s sigmoid φ1 s(φ2 q̇) − φ1/2 (φ3 = 0)."""
+def test_panda_friction_is_gaz_table_three():
+    """Panda, sliding: our mean friction is Gaz et al.'s fc sign(q̇) + fv q̇ (fv ≥ 0, no fo)."""
     robot, _ = quietly(lt.robots.panda)
     friction = lt.FrictionModel.from_robot(robot)
-    qd = np.linspace(-1.0, 1.0, 41)[:, None]
-    phi1, phi2 = np.array(GAZ_PHI1), np.array(GAZ_PHI2)
-    gaz = phi1 / (1.0 + np.exp(-phi2 * qd)) - phi1 / 2.0
-    # The band of half-width B = 2e-3 rad/s around the curve shifts the mean by < 1e-3 Nm.
-    np.testing.assert_allclose(friction.mean(qd), gaz, atol=1e-3)
+    qd = np.concatenate([np.linspace(-1.0, -0.01, 20), np.linspace(0.01, 1.0, 20)])[:, None]
+    gaz = np.array(GAZ_FC) * np.sign(qd) + np.maximum(GAZ_FV, 0.0) * qd
+    np.testing.assert_allclose(friction.mean(qd), gaz, atol=1e-6)
 
 
 def test_panda_ready_pose():
@@ -139,3 +137,16 @@ def test_panda_with_identified_inertials_and_the_shipped_drive_data():
     coulomb = [joint.friction.coulomb for joint in robot.joints]
     assert coulomb == [joint.friction.coulomb for joint in shipped.joints]
     np.testing.assert_allclose(robot.home(), shipped.home())
+
+
+@pytest.mark.parametrize("name", lt.robots.names())
+def test_info_command_summarises_every_shipped_robot(name, capsys):
+    """`leadthrough info --robot NAME` prints the robot's joints and exits 0."""
+    from leadthrough.cli.main import main
+
+    robot, _ = quietly(lt.robots.load, name)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", AssumedDriveDataWarning)
+        assert main(["info", "--robot", name]) == 0
+    printed = capsys.readouterr().out
+    assert all(joint in printed for joint in robot.joint_names)

@@ -19,9 +19,11 @@ from leadthrough.errors import (
 from leadthrough.estimation.contacts import ContactEvent, ContactParameters
 from leadthrough.estimation.log_observer import detect_contacts
 from leadthrough.estimation.observer import MomentumObserver, ObserverParameters
+from leadthrough.estimation.wrench import ToolWrench
 from leadthrough.friction.identification import FitReport, identify_friction
 from leadthrough.friction.model import FrictionModel
 from leadthrough.logs import JointLog
+from leadthrough.logs.sample import JointState
 from leadthrough.model import robots
 from leadthrough.model.description import (
     DHParameters,
@@ -50,6 +52,7 @@ __all__ = [
     "JointFriction",
     "JointLog",
     "JointOrigin",
+    "JointState",
     "LeadThrough",
     "LeadThroughParameters",
     "LeadthroughError",
@@ -61,6 +64,7 @@ __all__ = [
     "Placement",
     "RobotDescription",
     "RobotDescriptionError",
+    "ToolWrench",
     "__version__",
     "control_loop",
     "detect_contacts",

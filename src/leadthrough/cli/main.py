@@ -6,11 +6,13 @@ import argparse
 import sys
 from collections.abc import Sequence
 
+from leadthrough.cli import arguments as arg
 from leadthrough.errors import LeadthroughError
 from leadthrough.model import robots
 
 _EPILOG_INFO = """examples:
   leadthrough info                       # the shipped ABB YuMi left arm
+  leadthrough info --robot ur10e         # shipped: yumi, panda, ur5, ur10e
   leadthrough info --robot my_arm.toml   # a description file
   leadthrough info --robot panda.urdf --tip panda_hand
 """
@@ -20,8 +22,9 @@ def _add_robot_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--robot",
         default="yumi",
-        metavar="yumi|FILE",
-        help="shipped robot name or a .toml/.urdf description (default: yumi)",
+        metavar="NAME|FILE",
+        help=f"shipped robot ({', '.join(robots.names())}) or a .toml/.urdf description "
+        "(default: yumi)",
     )
     parser.add_argument("--tip", help="flange link of a URDF (needed when the tree branches)")
 
@@ -59,16 +62,14 @@ _EPILOG_IDENTIFY = """examples:
 
 
 def _identify(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
     from leadthrough.cli.identify import identify, parse_joints
 
     robot = robots.load(args.robot, tip=args.tip)
     summary = identify(
         robot,
-        Path(args.out),
-        log=Path(args.log) if args.log else None,
-        save_log=Path(args.save_log) if args.save_log else None,
+        args.out,
+        log=args.log,
+        save_log=args.save_log,
         joints=parse_joints(args.joints, robot.n_joints),
         seed=args.seed,
         random_friction=args.random_friction,
@@ -95,13 +96,11 @@ _EPILOG_REPLAY = """examples:
 
 
 def _demo(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
     from leadthrough.experiments.demo import run_demo
     from leadthrough.experiments.demo_report import write_report
 
     robot = robots.load(args.robot, tip=args.tip)
-    out = Path(args.out)
+    out = args.out
     result = run_demo(out, robot)
     print("4/4 writing the report …")
     report = write_report(result, robot, out)
@@ -113,31 +112,26 @@ def _demo(args: argparse.Namespace) -> int:
 
 
 def _teach(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
     from leadthrough.experiments.teach import teach_on_twin
 
     robot = robots.load(args.robot, tip=args.tip)
-    print(teach_on_twin(robot, Path(args.out), args.path, args.mode, args.duration,
-                        Path(args.friction) if args.friction else None, args.seed))  # fmt: skip
+    print(teach_on_twin(robot, args.out, args.path, args.mode, args.duration, args.friction,
+                        args.seed, overwrite=args.force))  # fmt: skip
     return 0
 
 
 def _replay(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
     from leadthrough.experiments.teach import replay_on_twin
 
-    print(replay_on_twin(Path(args.recording), Path(args.out), args.time_scale, args.seed))
+    print(replay_on_twin(args.recording, args.out, args.time_scale, args.seed,
+                         partial=args.partial))  # fmt: skip
     return 0
 
 
 def _experiments(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
     from leadthrough.experiments.report import write_experiments
 
-    report = write_experiments(robots.load(args.robot, tip=args.tip), Path(args.out))
+    report = write_experiments(robots.load(args.robot, tip=args.tip), args.out)
     print(f"report: {report}")
     return 0
 
@@ -151,7 +145,7 @@ def _add(commands, name: str, help_text: str, description: str, epilog: str, run
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand."""
-    parser = argparse.ArgumentParser(
+    parser = arg.OneLineParser(
         prog="leadthrough",
         description="Sensorless kinesthetic teaching of robot arms.",
     )
@@ -177,9 +171,11 @@ def build_parser() -> argparse.ArgumentParser:
     from leadthrough.twin.scenarios import SCENARIOS
 
     simulate.add_argument("--scenario", default="line", choices=sorted(SCENARIOS))
-    simulate.add_argument("--duration", type=float, help="simulated seconds (default: scenario's)")
-    simulate.add_argument("--seed", type=int, default=0, help="seed of every random draw")
-    simulate.add_argument("--out", default="out", help="directory for the figures (default: out)")
+    simulate.add_argument("--duration", type=arg.seconds,
+                          help="simulated seconds, at most 600 (default: scenario's)")  # fmt: skip
+    simulate.add_argument("--seed", type=arg.seed, default=0, help="seed of every random draw")
+    simulate.add_argument("--out", type=arg.out_directory, default="out",
+                          help="directory for the figures (default: out)")  # fmt: skip
     simulate.set_defaults(run=_simulate)
     identify = commands.add_parser(
         "identify",
@@ -190,59 +186,113 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     _add_robot_arguments(identify)
-    identify.add_argument("--log", help="read excitation logs (.csv or .npz) instead of the twin")
-    identify.add_argument("--save-log", help="also write the logs (.csv or .npz)")
+    identify.add_argument(
+        "--log",
+        type=arg.existing_file,
+        help="read excitation logs (.csv or .npz) instead of the twin",
+    )
+    identify.add_argument(
+        "--save-log", type=arg.log_file, help="also write the logs (.csv or .npz)"
+    )
     identify.add_argument("--joints", help="joints to identify, 1-based, e.g. 1,4 (default all)")
-    identify.add_argument("--seed", type=int, default=0, help="seed of the twin")
+    identify.add_argument("--seed", type=arg.seed, default=0, help="seed of the twin")
     identify.add_argument("--random-friction", action="store_true",
                           help="give the twin randomly drawn friction (seeded)")  # fmt: skip
-    identify.add_argument("--out", default="out/friction", help="output directory")
+    identify.add_argument(
+        "--out", type=arg.out_directory, default="out/friction", help="output directory"
+    )
     identify.set_defaults(run=_identify)
     demo = _add(commands, "demo", "the main job: teach, record and replay on the twin",
                 "Identify the twin's friction, let a simulated operator teach the YuMi a path with"
                 " active lead-through (recorded), replay it, and write a report with figures.",
                 _EPILOG_DEMO, _demo)  # fmt: skip
     _add_robot_arguments(demo)
-    demo.add_argument("--out", default="out/demo", help="report directory (default: out/demo)")
+    demo.add_argument(
+        "--out",
+        type=arg.out_directory,
+        default="out/demo",
+        help="report directory (default: out/demo)",
+    )
     teach = _add(commands, "teach", "teach the twin a path with a simulated hand, recorded",
                  "A simulated operator guides the twin with lead-through; the session is recorded"
                  " to an MCAP file.", _EPILOG_TEACH, _teach)  # fmt: skip
     _add_robot_arguments(teach)
     teach.add_argument("--path", default="line", choices=["line", "circle", "point_to_point"])
     teach.add_argument("--mode", default="active", choices=["active", "passive"])
-    teach.add_argument("--duration", type=float, help="seconds (default: the path's)")
-    teach.add_argument("--friction", help="identified friction TOML (default: the robot's)")
-    teach.add_argument("--seed", type=int, default=0)
-    teach.add_argument("--out", default="out/taught.mcap", help="recording to write")
+    teach.add_argument(
+        "--duration", type=arg.seconds, help="seconds taught, at most 600 (default: the path's)"
+    )
+    teach.add_argument(
+        "--friction",
+        type=arg.existing_file,
+        help="identified friction TOML (default: the robot file's nominal one)",
+    )
+    teach.add_argument("--seed", type=arg.seed, default=0)
+    teach.add_argument(
+        "--out", type=arg.new_file, default="out/taught.mcap", help="recording to write"
+    )
+    teach.add_argument("--force", action="store_true", help="overwrite an existing recording")
     replay = _add(commands, "replay", "replay a recorded path on the twin",
                   "Plan (filter, pauses as waypoints, limits checked) and replay a recording on"
                   " the twin; print the tracking errors and write a figure.",
                   _EPILOG_REPLAY, _replay)  # fmt: skip
-    replay.add_argument("recording", help="an MCAP recording of a teaching session")
-    replay.add_argument("--time-scale", type=float, default=1.0, help=">1 slower, <1 faster")
-    replay.add_argument("--seed", type=int, default=0)
-    replay.add_argument("--out", default="out/replay", help="figure directory")
+    replay.add_argument(
+        "recording", type=arg.existing_file, help="an MCAP recording of a teaching session"
+    )
+    replay.add_argument(
+        "--time-scale",
+        type=arg.time_scale,
+        default=1.0,
+        help=">1 slower, <1 faster, within 0.05 … 20 (default: 1)",
+    )
+    replay.add_argument(
+        "--partial",
+        action="store_true",
+        help="replay what was recovered of an unfinished or damaged recording",
+    )
+    replay.add_argument("--seed", type=arg.seed, default=0)
+    replay.add_argument(
+        "--out", type=arg.out_directory, default="out/replay", help="figure directory"
+    )
     experiments = _add(commands, "experiments", "every thesis experiment on the twin, one report",
-                       "Reproduce the figures of thesis chapters 4-6 (SPEC §12) on the realistic"
+                       "Reproduce the figures of thesis chapters 4-6 on the realistic"
                        " twin into one Markdown report.",
                        "examples:\n  leadthrough experiments --out out/experiments\n",
                        _experiments)  # fmt: skip
     _add_robot_arguments(experiments)
-    experiments.add_argument("--out", default="out/experiments", help="report directory")
+    experiments.add_argument(
+        "--out", type=arg.out_directory, default="out/experiments", help="report directory"
+    )
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; errors of leadthrough print as one line and exit 2."""
+    """Run the command line; every mistake prints one line on stderr and returns 2.
+
+    Ctrl-C prints one line and returns 130; a closed stdout (``| head``) ends quietly with 0.
+    """
     from leadthrough.twin.render import prefer_offscreen_gl
 
     prefer_offscreen_gl()  # the commands that draw the arm render offscreen
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
     try:
-        return args.run(args)
+        args = parser.parse_args(argv)
+        if args.command == "teach":
+            arg.refuse_overwrite(args.out, args.force)
+    except SystemExit as exit:  # --help (0) or a one-line argument error (2)
+        return exit.code if isinstance(exit.code, int) else 2
+    try:
+        with arg.one_line_warnings():
+            return args.run(args)
     except LeadthroughError as error:
-        print(f"leadthrough: error: {error}", file=sys.stderr)
+        print(f"leadthrough: error: {' '.join(str(error).split())}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt as interrupt:
+        print(f"leadthrough: interrupted{f': {interrupt}' if str(interrupt) else ''}",
+              file=sys.stderr)  # fmt: skip
+        return 130
+    except BrokenPipeError:
+        return arg.quiet_broken_pipe()
 
 
 if __name__ == "__main__":

@@ -16,6 +16,16 @@ kilogram at the flange), fitted by least squares, so that it follows the arm to 
 poses; what remains is a bias at q₀. The Coulomb error rescales the friction model.
 Results outside plausible bounds mean someone touched the arm: the calibration is
 refused (one line saying why) and the controller keeps its model.
+
+Safety: the calibration moves no joint faster than ``max_speed`` (a few times its own
+peak speed). A faster joint stops it at once: refused, the arm held against gravity.
+
+Tracking: computed torque, ``τ = G + M(q) (q̈_ref + ω² e + 2ζω ė + ω³/4 ∫e) + τ_f``.
+The full ``M(q)`` matters: per-joint gains ``m_ii ω²`` on a coupled arm give a loop
+gain of ``ω² M⁻¹ diag(M)``, whose eigenvalues reach 3.9 on a Panda without rotor
+inertia (2.5 on the YuMi) and push the crossover ~2× past what the one-period delay
+allows: the Panda's wrist joints then ran away at 2.8 → 6.5 rad/s within 32 ms,
+nobody touching. With ``M(q)`` every mode has the bandwidth ω.
 """
 
 from __future__ import annotations
@@ -26,7 +36,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from leadthrough.control.tracking import JointTracker
 from leadthrough.errors import ParameterError
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
@@ -54,7 +63,15 @@ class CalibrationParameters:
         cycles: Back-and-forth cycles [–].
         settle_time: Rest before the motion, for the observer to settle [s].
         bandwidth: Bandwidth of the joint tracking [Hz]: stiff enough that the lightest
-            joint breaks away within a fraction of the stroke.
+            joint breaks away within a fraction of the stroke (below 6 Hz the YuMi's wrist
+            sticks 20 mrad off on 2 of the 8 plants of ``benchmarks/guiding_quality.py``),
+            soft enough for a delayed, filtered velocity (above it the wrist's stick-slip
+            bursts pass 1 rad/s on 2 of 8). At 6 Hz all 8 calibrate.
+        max_speed: Fastest a joint may move during the calibration [rad/s]; faster,
+            the calibration stops (refused) and the arm is held against gravity. 20× the
+            motion's speed: a light wrist joint breaking away from stiction jumps for a
+            few ms, up to 0.58 rad/s on the YuMi plants of ``benchmarks/guiding_quality.py``;
+            the Panda's runaway went 2.8 → 6.5 rad/s within 32 ms.
         max_payload: Heaviest payload the calibration may report [kg].
         max_friction_change: Largest relative change of a Coulomb level it may report [–].
         friction_accuracy: Relative error of a measured Coulomb level away from the
@@ -69,19 +86,22 @@ class CalibrationParameters:
     speed: float = 0.05
     cycles: int = 2
     settle_time: float = 0.1
-    bandwidth: float = 8.0
+    bandwidth: float = 6.0
+    max_speed: float = 1.0
     max_payload: float = 2.0
     max_friction_change: float = 0.5
     friction_accuracy: float = 0.2
 
     def __post_init__(self) -> None:
-        names = ("stroke", "speed", "bandwidth", "max_payload", "max_friction_change",
-                 "friction_accuracy")  # fmt: skip
+        names = ("stroke", "speed", "bandwidth", "max_speed", "max_payload",
+                 "max_friction_change", "friction_accuracy")  # fmt: skip
         for name in names:
             real(name, getattr(self, name), minimum=0.0, strict=True, error=ParameterError)
         real("settle_time", self.settle_time, minimum=0.0, error=ParameterError)
         if not isinstance(self.cycles, int) or self.cycles < 1:
             raise ParameterError("cycles", f"must be a whole number >= 1, got {self.cycles!r}")
+        if self.max_speed <= self.speed:
+            raise ParameterError("max_speed", f"must exceed the speed {self.speed:g} rad/s")
 
     @property
     def frequency(self) -> float:
@@ -174,11 +194,10 @@ class CalibrationRun:
         low, high = dynamics.robot.q_min, dynamics.robot.q_max
         # move into the side with more room (a joint resting near a limit moves away from it)
         self._direction = np.where(high - self.pose >= self.pose - low, 1.0, -1.0)
-        self.tracker = JointTracker(
-            dynamics, bandwidth=self.parameters.bandwidth, reference_pose=self.pose
-        )
-        # an integral holds a load the model does not know (a payload) within the stroke
-        self._integral_gain = self.tracker.kp * 2.0 * np.pi * self.parameters.bandwidth / 4.0
+        omega = 2.0 * np.pi * self.parameters.bandwidth
+        # per unit of M(q): stiffness ω², damping 2ζω (ζ = 1), and an integral ω³/4 that
+        # holds a load the model does not know (a payload) within the stroke
+        self._gains = (omega**2, 2.0 * omega, omega**3 / 4.0)
         self._error_integral = np.zeros_like(self.pose)
         self._last_t = 0.0
         self.disturbance: str | None = None  # why the calibration must stop, if it must
@@ -199,16 +218,31 @@ class CalibrationRun:
             velocity = acceleration = np.zeros_like(velocity)
         d = self._direction
         q_ref, qd_ref = self.pose + d * offset, d * velocity
-        error = np.abs(q_ref - q)
-        if self.disturbance is None and np.max(error) > _DISTURBED * p.stroke:
+        self._check(q, qd, q_ref)
+        error = q_ref - q
+        self._error_integral += error * max(t - self._last_t, 0.0)
+        self._last_t = t
+        stiffness, damping, integral = self._gains
+        wanted = (d * acceleration + stiffness * error + damping * (qd_ref - qd)
+                  + integral * self._error_integral)  # fmt: skip
+        friction = self.friction.mean(qd_ref, q_ref)
+        return self.dynamics.gravity(q) + self.dynamics.mass(q) @ wanted + friction
+
+    def _check(self, q: FloatArray, qd: FloatArray, q_ref: FloatArray) -> None:
+        """Note the first disturbance: a joint too fast, or too far off the motion."""
+        if self.disturbance is not None:
+            return
+        p = self.parameters
+        speed, error = np.abs(qd), np.abs(q_ref - q)
+        if np.max(speed) > p.max_speed:
+            joint = int(np.argmax(speed))
+            self.disturbance = (f"joint {joint + 1} moved at {speed[joint]:.3f} rad/s, faster "
+                                f"than the calibration's {p.max_speed:g} rad/s: stopped, "
+                                "arm held")  # fmt: skip
+        elif np.max(error) > _DISTURBED * p.stroke:
             joint = int(np.argmax(error))
             self.disturbance = (f"joint {joint + 1} was {1e3 * error[joint]:.0f} mrad off the "
                                 "calibration motion: was the arm touched?")  # fmt: skip
-        self._error_integral += (q_ref - q) * max(t - self._last_t, 0.0)
-        self._last_t = t
-        friction = self.friction.mean(qd_ref, q_ref)
-        integral = self._integral_gain * self._error_integral
-        return friction + integral + self.tracker.torque(q, qd, q_ref, qd_ref, d * acceleration)
 
     def record(self, t: float, qd: FloatArray, estimate: FloatArray) -> None:
         """Keep the observer's reading of sliding joints, by direction."""
@@ -233,7 +267,8 @@ class CalibrationRun:
         e_minus = np.nanmedian(np.where(slid, minus, 0.0), axis=0)  # a stuck joint: no error
         gravity_error, coulomb_error = 0.5 * (e_plus + e_minus), 0.5 * (e_plus - e_minus)
         level = self.friction.coulomb_level(self.pose)
-        scale = 1.0 - coulomb_error / np.maximum(level, 1e-9)
+        # a joint modelled without friction keeps it: no level to rescale
+        scale = np.where(level > 0.0, 1.0 - coulomb_error / np.where(level > 0.0, level, 1.0), 1.0)
         changed = np.abs(scale - 1.0) > p.max_friction_change
         if np.any(changed):
             joint = int(np.argmax(np.abs(scale - 1.0)))
@@ -241,7 +276,8 @@ class CalibrationRun:
                                  "model's: was the arm touched?")  # fmt: skip
         per_kilogram = self.payload_regressor(self.pose)
         fitted = np.where(slid, per_kilogram, 0.0)  # only the joints that were measured
-        payload = max(float(-fitted @ gravity_error / (fitted @ fitted)), 0.0)
+        weight = float(fitted @ fitted)  # 0: no payload shows in this pose (unobservable)
+        payload = max(float(-fitted @ gravity_error) / weight, 0.0) if weight > 0.0 else 0.0
         if payload > p.max_payload:
             return self._refused(f"a payload of {payload:.2f} kg is more than the "
                                  f"{p.max_payload:g} kg allowed: was the arm touched?")  # fmt: skip

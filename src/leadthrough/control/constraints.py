@@ -1,10 +1,10 @@
 """Virtual constraints on the tool during lead-through (thesis ch. 7, SPEC §6).
 
 Each constraint is a spring–damper that acts only where it is violated and returns a
-force on the flange origin in world axes [N]; :func:`constraint_torque` maps the sum
-to the joints with ``Jᵀ``. In active mode the torque drives the admittance model (so
-the references, and with them the arm, respect the constraint); in passive mode it is
-added to the command.
+force on the tool centre point (TCP, ``robot.tcp``; the flange without a tool) in world
+axes [N]; :func:`constraint_torque` maps the sum to the joints with the TCP's ``Jᵀ``.
+In active mode the torque drives the admittance model (so the references, and with them
+the arm, respect the constraint); in passive mode it is added to the command.
 """
 
 from __future__ import annotations
@@ -19,12 +19,13 @@ from numpy.typing import ArrayLike
 from leadthrough.errors import ParameterError
 from leadthrough.model.description import FloatArray
 from leadthrough.model.dynamics import Dynamics
+from leadthrough.model.snapshot import ModelSnapshot
 from leadthrough.validation import real, real_array
 
 
 @dataclass(frozen=True)
 class VirtualConstraint(ABC):
-    """A spring–damper keeping the flange where it belongs.
+    """A spring–damper keeping the tool centre point where it belongs.
 
     Attributes:
         stiffness: Spring [N/m] per metre of violation.
@@ -40,7 +41,7 @@ class VirtualConstraint(ABC):
 
     @abstractmethod
     def force(self, position: FloatArray, velocity: FloatArray) -> FloatArray:
-        """Force on the flange [N], world axes, for its position [m] and velocity [m/s]."""
+        """Force on the TCP [N], world axes, for its position [m] and velocity [m/s]."""
 
     def _push(self, violation: float, direction: FloatArray, velocity: FloatArray) -> FloatArray:
         """Spring along ``direction`` (unit, pointing back inside) plus damping along it."""
@@ -143,12 +144,22 @@ class KeepOutSphere(VirtualConstraint):
 
 
 def constraint_torque(
-    constraints: Sequence[VirtualConstraint], dynamics: Dynamics, q: FloatArray, qd: FloatArray
+    constraints: Sequence[VirtualConstraint],
+    dynamics: Dynamics,
+    q: FloatArray,
+    qd: FloatArray,
+    model: ModelSnapshot | None = None,
 ) -> tuple[FloatArray, FloatArray]:
-    """Joint torque ``Jᵀ F`` [Nm] of all constraints, and the total force F [N] (world)."""
+    """Joint torque ``Jᵀ F`` [Nm] of all constraints, and the total force F [N] (world).
+
+    ``J`` is the TCP's; ``model`` is the model at (q, q̇) computed this period, if the
+    caller has it.
+    """
     if not constraints:
         return np.zeros(dynamics.n), np.zeros(3)
-    jacobian = dynamics.jacobian(q)[:3]
-    position, velocity = dynamics.pose(q)[:3, 3], jacobian @ qd
+    if model is None:
+        model = dynamics.snapshot(q, qd)
+    jacobian = model.tool_jacobian[:3]
+    position, velocity = model.tool_pose[:3, 3], jacobian @ qd
     force = sum((c.force(position, velocity) for c in constraints), np.zeros(3))
     return jacobian.T @ force, force

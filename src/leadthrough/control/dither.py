@@ -10,10 +10,11 @@ input, and the friction compensation's dead-band is widened while it is on.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from leadthrough.errors import ParameterError
 from leadthrough.friction.model import FrictionModel
@@ -29,7 +30,9 @@ class DitherParameters:
         frequency: Square-wave frequency [Hz] (15: below the resonances of Fig. 5.3).
         amplitude: Amplitude as a fraction of each joint's Coulomb level [–] (0.3).
         moving_velocity: A joint moves above this speed [rad/s]: dither off at once, and the
-            friction compensation dead-band while dithering.
+            friction compensation dead-band while dithering. Under a
+            :class:`~leadthrough.control.lead_through.LeadThrough` this is its
+            ``rest_velocity``, the one definition of "at rest".
         rest_time: Time below ``moving_velocity`` before the dither comes back [s].
         park_time: Once *every* joint has rested this long, nobody is guiding the arm: the
             dither stops until a joint moves again [s]; None dithers at rest for ever (the
@@ -57,6 +60,10 @@ class DitherParameters:
 class Dither:
     """Square-wave dither on the joints at rest.
 
+    Time comes from the samples (``step(qd, q, t)``): the wave's phase counts from the
+    first sample, the rest and park times from when each joint came to rest. Without
+    ``t`` it counts its own periods of ``dt``.
+
     Args:
         friction: Model whose Coulomb levels set the amplitudes.
         dt: Control period [s].
@@ -69,30 +76,58 @@ class Dither:
         self.parameters = parameters or DitherParameters()
         self.friction = friction
         self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
-        self._rest_needed = round(self.parameters.rest_time / self.dt)  # whole periods
-        park_time = self.parameters.park_time
-        self._quiet_needed = None if park_time is None else round(park_time / self.dt)
         self.reset()
 
     def reset(self) -> None:
         """Start a new wave; every joint counts as having rested long enough."""
-        self._time = 0.0
-        self._rest = np.full(self.friction.n_joints, self._rest_needed)  # periods at rest
-        self.active = np.ones(self.friction.n_joints, dtype=bool)
-        self._quiet = 0  # periods with every joint at rest
+        n = self.friction.n_joints
+        self._start: float | None = None  # time of the first sample [s]
+        self._periods = 0  # periods counted when no time is given
+        self._rest_since = np.full(n, -np.inf)  # when each joint came to rest [s], NaN: moving
+        self.active = np.ones(n, dtype=bool)
+        self._quiet_since: float | None = None  # when every joint was at rest [s]
+        self._now = 0.0
 
     @property
     def parked(self) -> bool:
         """Whether every joint has rested for ``park_time``: the dither is off."""
-        return self._quiet_needed is not None and self._quiet >= self._quiet_needed
+        park_time = self.parameters.park_time
+        if park_time is None or self._quiet_since is None:
+            return False
+        return bool(self._lasted(self._now - self._quiet_since, park_time))
 
-    def step(self, qd: ArrayLike, q: ArrayLike | None = None) -> FloatArray:
-        """Dither torque [Nm] for this period, zero on moving joints."""
+    def _lasted(self, elapsed: FloatArray | float, duration: float) -> NDArray[np.bool_]:
+        """Whether samples spanning ``elapsed`` [s] (each one period) cover ``duration`` [s].
+
+        Half a period of tolerance: a robot's clock (e.g. Unix time, 0.2 µs resolution
+        at 1.7e9 s) or its jitter does not move a decision by a period.
+        """
+        return np.asarray(elapsed + self.dt >= duration - 0.5 * self.dt)
+
+    def step(self, qd: ArrayLike, q: ArrayLike | None = None, t: float | None = None) -> FloatArray:
+        """Dither torque [Nm] for this period, zero on moving joints.
+
+        Args:
+            qd: Joint velocities [rad/s].
+            q: Joint readings [rad] (for position-dependent Coulomb levels).
+            t: Time of the sample [s], any origin (a robot's Unix clock included).
+        """
         p = self.parameters
+        if t is None:
+            t = self._periods * self.dt
+            self._periods += 1
+        if self._start is None:
+            self._start = float(t)
+        now = self._now = float(t) - self._start  # small numbers: a Unix clock loses nothing
         still = np.abs(np.asarray(qd, dtype=float)) < p.moving_velocity
-        self._rest = np.where(still, self._rest + 1, 0)
-        self._quiet = self._quiet + 1 if np.all(still) else 0
-        self.active = (self._rest >= self._rest_needed) & ~self.parked
-        wave = 1.0 if np.sin(2.0 * np.pi * p.frequency * self._time) >= 0.0 else -1.0
-        self._time += self.dt
+        # at rest since then (−inf: long enough already); NaN while moving
+        self._rest_since = np.where(still, np.fmin(self._rest_since, now), np.nan)
+        if not np.all(still):
+            self._quiet_since = None
+        elif self._quiet_since is None:
+            self._quiet_since = now
+        self.active = self._lasted(now - self._rest_since, p.rest_time) & ~self.parked
+        # a sample on an edge (within 1e-4 half-period: clock rounding) starts the new half
+        half_periods = math.floor(2.0 * p.frequency * now + 1e-4)
+        wave = 1.0 if half_periods % 2 == 0 else -1.0
         return np.where(self.active, wave * p.amplitude * self.friction.coulomb_level(q), 0.0)

@@ -1,8 +1,10 @@
 """Lead-through control: passive and active, behind the safety supervisor (SPEC §4, §6, §7).
 
-One step, in order:
+One step, in order, on the robot's sample (its time stamp is the one clock):
 
 1. the supervisor checks the sensor sample (a bad one → the safe stop, this period);
+   the model of the arm at it is computed once (:meth:`Dynamics.snapshot`: G, M, Cᵀq̇,
+   the TCP Jacobian and pose) and handed to every step below;
 2. feed-forward ``τ_ff = G(q) + τ_fc(q̇) + dither`` (thesis eq. 6.3, §5.3);
 3. the Kalman observer estimates ``τ̂_ext`` from the measured torque (or the command
    sent, if the robot measures none), dither removed;
@@ -16,13 +18,17 @@ One step, in order:
    constraints) into references that stay clear of the joint limits, tracked by a PD
    whose gains follow M(q) (thesis eqs. 6.4–6.6); near an end-stop a push *away* from
    it is taken for the stop's reaction, not the operator's (the failure of thesis §6.3.2);
-6. the supervisor limits the command (torque, speed, soft walls).
+6. the supervisor limits the command (torque, joint and TCP speed, soft walls).
+
+An exception in any of these latches the supervisor's fault naming the exception and
+the component, and the safe stop is sent in the same period.
 """
 
 from __future__ import annotations
 
-from collections import deque
+import traceback
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -39,26 +45,46 @@ from leadthrough.control.admittance import (
 from leadthrough.control.bias import ModelErrorBias
 from leadthrough.control.calibration import Calibration, CalibrationRun
 from leadthrough.control.constraints import VirtualConstraint, constraint_torque
-from leadthrough.control.feedforward import FeedForwardTorques, PassiveFeedForward
+from leadthrough.control.feedforward import DelayLine, FeedForwardTorques, PassiveFeedForward
 from leadthrough.control.parameters import LeadThroughParameters, Mode
 from leadthrough.errors import ParameterError
 from leadthrough.estimation.observer import MomentumObserver
+from leadthrough.estimation.wrench import ToolWrench, tool_wrench
 from leadthrough.friction.model import FrictionModel
+from leadthrough.logs.sample import JointState, joint_state
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
-from leadthrough.safety.supervisor import SafetyEvent, SafetySupervisor, SupervisorState
+from leadthrough.model.snapshot import ModelSnapshot
+from leadthrough.safety.supervisor import SafetySupervisor, SupervisorState
+from leadthrough.validation import real
+
+#: Folder of the package: a failure names the innermost frame inside it.
+_PACKAGE = Path(__file__).resolve().parents[1]
 
 
 class LeadThrough:
-    """Hand-guiding controller: ``tau_cmd = ctl.step(q, qd, tau_measured)`` once per period.
+    """Hand-guiding controller: ``tau_cmd = ctl.step(state)`` once per period.
+
+    ``state`` is the robot's sample (:class:`~leadthrough.logs.sample.JointState`: t, q,
+    q̇, τ_measured) and its time stamp is the controller's one clock: the dither, the
+    calibration, the supervisor's events and its safe stop all take time from it. The
+    positional form ``step(q, qd, tau_measured=None)`` also works; time is then the
+    controller's own count of periods of ``dt``.
 
     Args:
-        robot: The arm.
+        robot: The arm (its ``tcp`` is where the tool speed limit, the constraints and
+            :attr:`tool_wrench` act).
         mode: ``"passive"`` or ``"active"`` (overrides ``parameters.mode``).
-        dt: Control period [s].
+        dt: Control period [s]; must be the robot's (``control_loop`` checks it).
         friction: Friction model (e.g. an identified one); default the description's.
-        parameters: All other settings.
+        parameters: All other settings, validated against ``robot`` here.
         constraints: Virtual constraints on the tool.
+        calibrate: Run the start-up calibration (``parameters.calibration``) first: the
+            arm then moves by itself for :attr:`calibration_time` (nobody may touch it)
+            before guiding starts. Off by default: the arm does not move unless asked.
+
+    Raises:
+        ParameterError: A setting that does not fit the robot (one line naming it).
     """
 
     def __init__(
@@ -69,18 +95,28 @@ class LeadThrough:
         friction: FrictionModel | None = None,
         parameters: LeadThroughParameters | None = None,
         constraints: Sequence[VirtualConstraint] = (),
+        calibrate: bool = False,
     ) -> None:
         parameters = parameters or LeadThroughParameters()
         if mode is not None and mode != parameters.mode:
             parameters = LeadThroughParameters(**{**parameters.__dict__, "mode": mode})
+        parameters.check_robot(robot)
+        if calibrate and parameters.calibration is None:
+            raise ParameterError("calibrate", "True needs parameters.calibration (it is None)")
         self.parameters = parameters
-        self.robot, self.dt = robot, dt
+        self.robot = robot
+        self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
         friction = friction or FrictionModel.from_robot(robot)
         if friction.n_joints != robot.n_joints:
             raise ParameterError("friction", f"has {friction.n_joints} joints, the robot "
                                              f"{robot.n_joints}")  # fmt: skip
         self.nominal_friction = friction
         self.constraints = tuple(constraints)
+        for constraint in self.constraints:
+            if not isinstance(constraint, VirtualConstraint):
+                raise ParameterError("constraints", f"expected VirtualConstraint objects, got "
+                                     f"{type(constraint).__name__}")  # fmt: skip
+        self.calibrate = bool(calibrate)
         self.supervisor = SafetySupervisor(Dynamics(robot), dt, parameters.safety)
         self._reference_low = robot.q_min + parameters.limit_zone
         self._reference_high = robot.q_max - parameters.limit_zone
@@ -90,10 +126,10 @@ class LeadThrough:
         """The model-based parts, for the model of ``robot`` (and a payload) and ``friction``."""
         p = self.parameters
         self.dynamics = Dynamics(robot)
-        self.supervisor.dynamics = self.dynamics  # one model, computed once per period
+        self.supervisor.use_model(self.dynamics)  # one model: robot and dynamics agree
         self.friction = friction
         self.feed_forward = PassiveFeedForward(self.dynamics, friction, self.dt, p.compensation,
-                                               p.dither, p.measurement_delay)  # fmt: skip
+                                               p.dither, measurement_delay=None)  # fmt: skip
         self.observer = MomentumObserver(self.dynamics, friction, self.dt, p.observer)
         relative = (friction.relative_error if p.friction_uncertainty is None
                     else np.full(robot.n_joints, p.friction_uncertainty))  # fmt: skip
@@ -113,6 +149,11 @@ class LeadThrough:
         return self.parameters.mode
 
     @property
+    def time(self) -> float:
+        """Time of the latest sample [s], on the robot's clock (NaN before the first)."""
+        return self._t
+
+    @property
     def tau_ext_hat(self) -> FloatArray:
         """Latest estimated external torque [Nm] (bias not removed)."""
         return self.observer.tau_ext_hat
@@ -121,6 +162,18 @@ class LeadThrough:
     def std(self) -> FloatArray:
         """Standard deviation of :attr:`tau_ext_hat` [Nm]."""
         return self.observer.std
+
+    @property
+    def tool_wrench(self) -> ToolWrench:
+        """Estimated wrench on the tool at the TCP, world axes, with its covariance.
+
+        ``F̂ = (Jᵀ)⁺ τ̂_ext`` with the TCP Jacobian of the latest sample and the
+        observer's std (see :mod:`leadthrough.estimation.wrench`); zero before the first.
+        """
+        model = self.model
+        if model is None:
+            return ToolWrench(np.zeros(3), np.zeros(3), np.zeros((6, 6)))
+        return tool_wrench(model.tool_jacobian, self.observer.tau_ext_hat, self.observer.std)
 
     @property
     def operator_torque(self) -> FloatArray:
@@ -146,12 +199,12 @@ class LeadThrough:
     def calibration_time(self) -> float:
         """How long the start-up calibration lasts [s] (0 without one)."""
         calibration = self.parameters.calibration
-        return 0.0 if calibration is None else calibration.duration
+        return calibration.duration if self.calibrate and calibration is not None else 0.0
 
     def reset(self) -> None:
         """Start afresh: nominal model, filters, references, bias and calibration.
 
-        A latched fault is cleared too.
+        A latched fault is cleared too; the calibration runs again if asked for.
         """
         self._build(self.robot, self.nominal_friction)
         self.supervisor.reset()
@@ -163,65 +216,123 @@ class LeadThrough:
         self._weight = np.zeros(n)
         self._feedback = np.zeros(n)  # the admittance's last tracking torque [Nm]
         self._references: AdmittanceState | None = None
-        self._sent = deque([np.zeros(n)] * max(p.measurement_delay, 1),
-                           maxlen=max(p.measurement_delay, 1))  # fmt: skip
-        self._time = 0.0
+        self._sent = DelayLine((2, n), p.measurement_delay)  # (command, its dither) [Nm]
+        self._own_clock = 0.0  # [s], for the positional form of step, which brings no time
+        self._t = float("nan")
+        self._stage = "sample"
+        self.model: ModelSnapshot | None = None  # the model at the latest sample
         self.last_feed_forward: FeedForwardTorques | None = None
         self.calibration: Calibration | None = None
         self._calibration_run: CalibrationRun | None = None
         self._calibration_start = 0.0  # [s], set when the first sample arrives
-        self._calibrating = p.calibration is not None  # the supervisor stays in TEACHING
+        self._calibrating = self.calibrate  # the supervisor stays in TEACHING
+
+    def set_payload(self, mass: float, com: ArrayLike = (0.0, 0.0, 0.0)) -> None:
+        """Carry a known payload from now on (``robot.with_payload``): a new model everywhere.
+
+        The feed-forward, the observer and the supervisor all switch to the same model;
+        the filters restart (do it while the arm rests).
+
+        Args:
+            mass: Payload mass [kg], >= 0.
+            com: Its centre of mass in the flange frame [m].
+        """
+        self._build(self.robot.with_payload(mass, com), self.friction)
 
     # --- the control step --------------------------------------------------------------
 
     def step(
-        self, q: ArrayLike, qd: ArrayLike, tau_measured: ArrayLike | None = None
+        self,
+        state: JointState | ArrayLike,
+        qd: ArrayLike | None = None,
+        tau_measured: ArrayLike | None = None,
     ) -> FloatArray:
         """Motor torque command [Nm] for this period (always finite, within the limits).
 
         Args:
-            q: Joint readings [rad].
-            qd: Joint velocities [rad/s].
-            tau_measured: Motor torque measured over the last period [Nm], if the robot
-                reports one; otherwise the command sent ``measurement_delay`` steps ago.
-        """
-        self._time += self.dt
-        supervisor = self.supervisor
-        if not supervisor.check(self._time, q, qd, tau_measured):
-            return self._send(supervisor.command(self._time, q, qd, np.zeros(self.robot.n_joints)))
-        try:
-            control = self._calibrate if self._calibrating else self._control
-            desired = control(np.asarray(q, float), np.asarray(qd, float), tau_measured)
-        except Exception:  # nothing escapes without the safe stop: a NaN command faults
-            desired = np.full(self.robot.n_joints, np.nan)
-        return self._send(supervisor.command(self._time, q, qd, desired))
+            state: The robot's sample (t [s], q [rad], q̇ [rad/s], τ_measured [Nm]); or,
+                positional form, the joint readings q [rad].
+            qd: Positional form only: joint velocities [rad/s].
+            tau_measured: Positional form only: motor torque measured over the last
+                period [Nm], if the robot reports one; otherwise the command sent
+                ``measurement_delay`` steps ago stands for it.
 
-    def _send(self, command: FloatArray) -> FloatArray:
-        self._sent.append(command.copy())
+        An exception inside the step latches the supervisor's fault, naming the exception
+        and the component it came from, and the safe stop is returned this period.
+        """
+        t, q, qd, tau_measured = self._sample(state, qd, tau_measured)
+        supervisor, zeros = self.supervisor, np.zeros(self.robot.n_joints)
+        if not supervisor.check(t, q, qd, tau_measured):
+            return self._send(supervisor.command(t, q, qd, zeros), zeros)
+        try:
+            self._stage = "model"
+            self.model = model = self.dynamics.snapshot(q, qd)
+            tau = None if tau_measured is None else np.asarray(tau_measured, dtype=float)
+            if self._calibrating:
+                desired, dither = self._calibrate(t, model, tau), zeros
+            else:
+                desired, dither = self._control(t, model, tau)
+            self._stage = "supervisor"
+            command = supervisor.command(t, q, qd, desired, model)
+        except Exception as error:  # the safe stop this period, and the fault says what failed
+            supervisor.stop(self._failure(error), t)
+            command, dither = supervisor.command(t, q, qd, zeros), zeros
+        return self._send(command, dither)
+
+    def _sample(
+        self, state: JointState | ArrayLike, qd: ArrayLike | None, tau: ArrayLike | None
+    ) -> tuple[float, FloatArray, FloatArray, FloatArray | None]:
+        """(t, q, q̇, τ) of this period; the positional form counts periods of ``dt``."""
+        if not isinstance(state, JointState):
+            self._own_clock += self.dt
+        sample = joint_state(state, qd, tau, self._own_clock)
+        self._t = float(sample.t)
+        return self._t, sample.q, sample.qd, sample.tau_measured
+
+    def _failure(self, error: Exception) -> str:
+        """One line: the component that failed, the exception, where in the package."""
+        inside = [frame for frame in traceback.extract_tb(error.__traceback__)
+                  if Path(frame.filename).resolve().is_relative_to(_PACKAGE)]  # fmt: skip
+        where = ""
+        if inside:
+            frame = inside[-1]
+            module = Path(frame.filename).resolve().relative_to(_PACKAGE).as_posix()
+            where = f" (at {module}:{frame.lineno} in {frame.name})"
+        return f"{self._stage} failed: {type(error).__name__}: {error}{where}"
+
+    def _send(self, command: FloatArray, dither: FloatArray) -> FloatArray:
+        self._sent.push(np.stack([command, dither]))
         return command
 
+    def _measured(self, tau_measured: FloatArray | None) -> tuple[FloatArray, FloatArray]:
+        """The motor torque applied over the last period [Nm] and the dither it holds."""
+        command, dither = self._sent.measured
+        return (command if tau_measured is None else tau_measured), dither
+
     def _calibrate(
-        self, q: FloatArray, qd: FloatArray, tau_measured: ArrayLike | None
+        self, t: float, model: ModelSnapshot, tau_measured: FloatArray | None
     ) -> FloatArray:
         """One period of the start-up calibration (:mod:`leadthrough.control.calibration`)."""
+        self._stage = "calibration"
+        q, qd = model.q, model.qd
         if self._calibration_run is None:
             self._calibration_run = CalibrationRun(self.dynamics, self.friction, q,
                                                    self.parameters.calibration)  # fmt: skip
-            self._calibration_start = self._time
-        run, t = self._calibration_run, self._time - self._calibration_start
-        applied = self._sent[0] if tau_measured is None else np.asarray(tau_measured, float)
-        run.record(t, qd, self.observer.update(q, qd, applied))
-        command = run.command(t, q, qd)
-        if t >= run.duration or run.disturbance is not None:
-            self._finish_calibration(run.result())
+            self._calibration_start = t
+        run, elapsed = self._calibration_run, t - self._calibration_start
+        applied, _ = self._measured(tau_measured)
+        run.record(elapsed, qd, self.observer.update(q, qd, applied, model))
+        command = run.command(elapsed, q, qd)
+        if elapsed >= run.duration or run.disturbance is not None:
+            self._finish_calibration(run.result(), t)
             if run.disturbance:  # let the arm go at once: hold it against gravity only
-                return self.dynamics.gravity(q)
+                return model.gravity
         return command
 
-    def _finish_calibration(self, calibration: Calibration) -> None:
+    def _finish_calibration(self, calibration: Calibration, t: float) -> None:
         """Use what the calibration measured: payload, friction levels, bias at the pose."""
         self.calibration, self._calibrating = calibration, False
-        self.supervisor.events.append(SafetyEvent(self._time, "calibration", calibration.summary()))
+        self.supervisor.log("calibration", calibration.summary(), t)
         if not calibration.accepted:
             return
         robot = calibration.robot(self.robot)
@@ -229,17 +340,27 @@ class LeadThrough:
         self._build(robot, calibration.friction(self.nominal_friction, accuracy))
         self.model_error.calibrate(calibration.bias, self.dynamics.gravity(calibration.pose))
 
-    def _control(self, q: FloatArray, qd: FloatArray, tau_measured: ArrayLike | None) -> FloatArray:
-        feed_forward = self.feed_forward.step(q, qd)
+    def _control(
+        self, t: float, model: ModelSnapshot, tau_measured: FloatArray | None
+    ) -> tuple[FloatArray, FloatArray]:
+        """The guiding command [Nm] and the dither it holds [Nm]."""
+        q, qd = model.q, model.qd
+        self._stage = "feed-forward"
+        feed_forward = self.feed_forward.step(q, qd, model, t)
         self.last_feed_forward = feed_forward
-        applied = self._sent[0] if tau_measured is None else np.asarray(tau_measured, float)
-        estimate = self.observer.update(q, qd, applied - feed_forward.dither_in_measurement)
-        self._update_drive(estimate, q, qd, feed_forward.gravity)
+        applied, dither = self._measured(tau_measured)
+        self._stage = "observer"
+        estimate = self.observer.update(q, qd, applied - dither, model)
+        self._stage = "operator torque"
+        self._update_drive(estimate, q, qd, model.gravity)
         torque = feed_forward.total
-        constraint, _ = constraint_torque(self.constraints, self.dynamics, q, qd)
+        self._stage = "constraints"
+        constraint, _ = constraint_torque(self.constraints, self.dynamics, q, qd, model)
         if self.mode == "passive":
-            return torque + constraint
-        return torque + self._admittance(q, qd, self._drive + constraint)
+            return torque + constraint, feed_forward.dither
+        self._stage = "admittance"
+        active = self._admittance(q, qd, self._drive + constraint, model.mass)
+        return torque + active, feed_forward.dither
 
     def _update_drive(
         self, estimate: FloatArray, q: FloatArray, qd: FloatArray, gravity: FloatArray
@@ -275,7 +396,9 @@ class LeadThrough:
         coulomb = self.friction.mean(qd, q) - viscous
         return self._friction_relative * coulomb + self._viscous_relative * viscous
 
-    def _admittance(self, q: FloatArray, qd: FloatArray, drive: FloatArray) -> FloatArray:
+    def _admittance(
+        self, q: FloatArray, qd: FloatArray, drive: FloatArray, mass: FloatArray
+    ) -> FloatArray:
         """References from the admittance model, and the PD torque that tracks them.
 
         Virtual inertia k_M M(q) and damping :func:`virtual_damping`; the PD gains follow
@@ -285,7 +408,6 @@ class LeadThrough:
         p = self.parameters
         if p.limit_aware:
             drive = self._ignore_end_stop_reaction(q, drive)
-        mass = self.dynamics.mass(q)
         inertia = np.diag(mass)
         references = self._references or AdmittanceState(q.copy(), qd.copy())
         lost = np.abs(references.q_ref - q) > p.reanchor_error

@@ -22,11 +22,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
+import numpy as np
+
 from leadthrough.control.calibration import CalibrationParameters
 from leadthrough.control.dither import DitherParameters
+from leadthrough.control.feedforward import measurement_delay
 from leadthrough.errors import ParameterError
 from leadthrough.estimation.observer import ObserverParameters
 from leadthrough.friction.compensation import CoulombCompensationParameters
+from leadthrough.model.description import RobotDescription
 from leadthrough.safety.supervisor import SafetyParameters
 from leadthrough.validation import real
 
@@ -37,15 +41,17 @@ Mode = Literal["passive", "active"]
 class LeadThroughParameters:
     """Parameters of lead-through control.
 
-    Gains are per joint, scaled by the joint's inertia m_ii at the home pose so that
-    every joint responds alike.
+    Gains are per joint, scaled by the joint's inertia m_ii(q) at the current pose, so
+    that every joint responds alike in every pose. Validated here for themselves, and
+    against the robot by :meth:`check_robot` when a controller is built.
 
     Attributes:
         mode: ``"passive"`` (feed-forward only) or ``"active"`` (admittance on top).
         compensation: Coulomb compensation law (ε, q̇₀, q̇₁), thesis §4.2.2.
         dither: Dither settings, or None for no dithering (thesis §5.3).
-        calibration: Start-up calibration (payload, friction levels, gravity bias), or None
-            to start guiding at once with the model as given.
+        calibration: Settings of the start-up calibration (payload, friction levels, gravity
+            bias). It only runs when asked for: ``LeadThrough(..., calibrate=True)`` (the
+            arm then moves by itself for ``calibration.duration``).
         observer: Kalman observer tuning (thesis §5.2.1, but Q_τ = 100 instead of 10: an
             estimate that lags less leaves the admittance more stability margin, see
             :mod:`leadthrough.experiments.stability`).
@@ -90,7 +96,12 @@ class LeadThroughParameters:
         assist_speed_fraction: The admittance never asks a joint for more than this
             fraction of its speed limit [–] (teaching is slow; the tool speed limit of the
             supervisor stays the last word).
-        measurement_delay: Control steps from sending a command to measuring it [–].
+        measurement_delay: Control steps from sending a command to measuring it, an
+            integer ≥ 1 [–] (2 on the twin and the thesis' interface: applied one period
+            late, measured over the period after).
+        rest_velocity: A joint slower than this is at rest [rad/s]: the one definition
+            of "at rest" (the dither comes on after ``dither.rest_time`` at rest, and
+            the friction compensation's dead-band widens to it while dithering).
     """
 
     mode: Mode = "active"
@@ -119,6 +130,7 @@ class LeadThroughParameters:
     limit_aware: bool = True
     assist_speed_fraction: float = 0.3
     measurement_delay: int = 2
+    rest_velocity: float = 0.01
 
     def __post_init__(self) -> None:
         if self.mode not in ("passive", "active"):
@@ -127,10 +139,14 @@ class LeadThroughParameters:
                     "reanchor_error", "limit_zone", "assist_speed_fraction")  # fmt: skip
         for name in positive:
             real(name, getattr(self, name), minimum=0.0, strict=True, error=ParameterError)
+        measurement_delay(self.measurement_delay)
+        real("rest_velocity", self.rest_velocity, minimum=0.0, strict=True, error=ParameterError)
+        if self.assist_speed_fraction > 1.0:
+            raise ParameterError("assist_speed_fraction", f"must be in (0, 1], got "
+                                 f"{self.assist_speed_fraction:g}")  # fmt: skip
         for name in (
             "position_bandwidth",
             "mass_uncertainty",
-            "measurement_delay",
             "stiction_margin",
             "rest_damping",
             "assist_knee",
@@ -140,6 +156,35 @@ class LeadThroughParameters:
         if self.friction_uncertainty is not None:
             real("friction_uncertainty", self.friction_uncertainty, minimum=0.0,
                  error=ParameterError)  # fmt: skip
+        self._check_rest_velocity()
+
+    def _check_rest_velocity(self) -> None:
+        """The dither's ``moving_velocity`` is ``rest_velocity``: one definition of at rest."""
+        if self.dither is None or self.dither.moving_velocity == self.rest_velocity:
+            return
+        if self.dither.moving_velocity != DitherParameters.moving_velocity:
+            raise ParameterError("dither.moving_velocity", f"{self.dither.moving_velocity:g} "
+                                 f"differs from rest_velocity {self.rest_velocity:g}: set "
+                                 "rest_velocity only (one definition of at rest)")  # fmt: skip
+        dither = dataclasses.replace(self.dither, moving_velocity=self.rest_velocity)
+        object.__setattr__(self, "dither", dither)
+
+    def check_robot(self, robot: RobotDescription) -> None:
+        """Raise ParameterError (one line) for a setting that does not fit ``robot``.
+
+        The reference bounds ``q_min + limit_zone`` and ``q_max − limit_zone`` must not
+        cross, nor the supervisor's soft walls (``safety.soft_limit_margin``).
+        """
+        span = robot.q_max - robot.q_min
+        margins = {"limit_zone": self.limit_zone,
+                   "safety.soft_limit_margin": self.safety.soft_limit_margin}  # fmt: skip
+        for name, margin in margins.items():
+            crossed = np.flatnonzero(2.0 * margin >= span)
+            if crossed.size:
+                j = crossed[0]
+                raise ParameterError(name, f"{margin:g} rad from each limit leaves nothing of "
+                                     f"joint {j + 1}'s range of {span[j]:.4g} rad (the bounds "
+                                     "would cross)")  # fmt: skip
 
     @classmethod
     def damping_control(cls, **changes: Any) -> LeadThroughParameters:

@@ -19,8 +19,10 @@ from numpy.typing import ArrayLike
 from leadthrough.control.tracking import JointTracker
 from leadthrough.errors import ParameterError, ReplayError
 from leadthrough.friction.model import FrictionModel
+from leadthrough.logs.sample import JointState, joint_state
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
+from leadthrough.model.snapshot import ModelSnapshot
 from leadthrough.safety.supervisor import SafetySupervisor
 from leadthrough.trajectories import minimum_jerk_acceleration, minimum_jerk_phase
 from leadthrough.validation import real
@@ -244,7 +246,11 @@ def _check_limits(plan: ReplayPlan, robot: RobotDescription, friction: FrictionM
 
 
 class Replayer:
-    """Replays a plan: ``tau_cmd = replayer.step(q, qd, tau_measured)`` once per period.
+    """Replays a plan: ``tau_cmd = replayer.step(state)`` once per period.
+
+    Time comes from the robot's samples (``state.t``, any origin): the replay's clock
+    starts at the first sample. The positional form ``step(q, qd, tau_measured)`` counts
+    periods of ``dt`` instead.
 
     A minimum-jerk move from the first pose read to the path start (``approach_time``),
     then the path, then a hold of its last pose::
@@ -261,7 +267,7 @@ class Replayer:
     Attributes:
         supervisor: The safety supervisor every command passes.
         integral: Integral torque [Nm], (n,).
-        time: Time of the latest step since the first one [s] (the approach starts at 0).
+        time: Time of the latest sample since the first one [s] (the approach starts at 0).
 
     Args:
         plan: A plan from :func:`plan_replay`.
@@ -294,6 +300,7 @@ class Replayer:
         self.integral = np.zeros(dynamics.n)
         self._integral_limit = INTEGRAL_LIMIT * self.friction.coulomb
         self.time, self._steps = 0.0, 0
+        self._t0: float | None = None  # the first sample's time on the robot's clock [s]
         self._start: FloatArray | None = None
 
     @property
@@ -319,33 +326,52 @@ class Replayer:
         return self._start + phase * distance, rate * distance, acceleration
 
     def step(
-        self, q: ArrayLike, qd: ArrayLike, tau_measured: ArrayLike | None = None
+        self,
+        state: JointState | ArrayLike,
+        qd: ArrayLike | None = None,
+        tau_measured: ArrayLike | None = None,
     ) -> FloatArray:
         """Motor torque command [Nm] for this period (always finite, within the limits).
 
         Args:
-            q: Joint readings [rad], (n,).
-            qd: Joint velocities [rad/s], (n,).
-            tau_measured: Measured motor torque [Nm], (n,), or None (only checked).
+            state: The robot's sample (t [s], q [rad], q̇ [rad/s], τ [Nm]); or, positional
+                form, the joint readings q [rad], (n,).
+            qd: Positional form only: joint velocities [rad/s], (n,).
+            tau_measured: Positional form only: measured motor torque [Nm], (n,), or None
+                (only checked).
+
+        An exception inside the step latches the supervisor's fault naming it, and the
+        safe stop is returned this period.
         """
-        self.time, self._steps = self._steps * self.dt, self._steps + 1
-        supervisor, t = self.supervisor, self.time
+        sample = joint_state(state, qd, tau_measured, self._steps * self.dt)
+        t, q, qd, tau_measured = sample.t, sample.q, sample.qd, sample.tau_measured
+        self._steps += 1
+        if self._t0 is None:
+            self._t0 = float(t)
+        self.time = float(t) - self._t0
+        supervisor, zeros = self.supervisor, np.zeros(self.dynamics.n)
         if not supervisor.check(t, q, qd, tau_measured):
-            return supervisor.command(t, q, qd, np.zeros(self.dynamics.n))
+            return supervisor.command(t, q, qd, zeros)
         try:
-            q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
-            if self._start is None:
-                self._start = q.copy()
-            q_ref, qd_ref, qdd_ref = self.reference(t)
-            error, tracker = q_ref - q, self.tracker
-            self.integral = np.clip(self.integral + self.ki * error * self.dt,
-                                    -self._integral_limit, self._integral_limit)  # fmt: skip
-            asked = qd_ref + tracker.kp / tracker.kd * error  # the velocity the PD asks for
-            desired = tracker.torque(q, qd, q_ref, qd_ref, qdd_ref) + self.integral
-            desired += self.friction.mean(asked, q_ref)
-        except Exception:  # nothing escapes without the safe stop: a NaN command faults
-            desired = np.full(self.dynamics.n, np.nan)
-        return supervisor.command(t, q, qd, desired)
+            model = self.dynamics.snapshot(q, qd)
+            desired = self._desired(model)
+        except Exception as error:  # the safe stop this period, and the fault says what failed
+            supervisor.stop(f"replay failed: {type(error).__name__}: {error}", t)
+            return supervisor.command(t, q, qd, zeros)
+        return supervisor.command(t, q, qd, desired, model)
+
+    def _desired(self, model: ModelSnapshot) -> FloatArray:
+        """The tracking torque [Nm] at the model's state and the replay time."""
+        q, qd = model.q, model.qd
+        if self._start is None:
+            self._start = q.copy()
+        q_ref, qd_ref, qdd_ref = self.reference(self.time)
+        error, tracker = q_ref - q, self.tracker
+        self.integral = np.clip(self.integral + self.ki * error * self.dt,
+                                -self._integral_limit, self._integral_limit)  # fmt: skip
+        asked = qd_ref + tracker.kp / tracker.kd * error  # the velocity the PD asks for
+        desired = tracker.torque(q, qd, q_ref, qd_ref, qdd_ref) + self.integral
+        return desired + self.friction.mean(asked, q_ref)
 
 
 def replay_errors(

@@ -1,11 +1,14 @@
-"""Joint-space tracking: model feed-forward plus a PD loop (experiments and replay).
+"""Joint-space tracking by computed torque (experiments, excitation and replay).
 
-    τ = G(q) + M(q) q̈_ref + K_P (q_ref − q) + K_D (q̇_ref − q̇)
+    τ = G(q) + M(q) (q̈_ref + ω² (q_ref − q) + 2ζω (q̇_ref − q̇))
 
-with per-joint gains from a bandwidth and a damping ratio on the diagonal of M at the
-current pose, ``K_P = m_ii(q) ω²``, ``K_D = 2 ζ m_ii(q) ω``, so that light wrist joints
-and heavy shoulder joints respond alike, and a joint whose inertia drops as the arm
-folds (the YuMi's joint 3 by 4×) keeps its bandwidth instead of going unstable.
+The gains are ``K_P = M(q) ω²`` and ``K_D = 2ζω M(q)``, the full inertia matrix of the
+current pose, so that every mode of the arm, not only every joint, has the bandwidth ω:
+light wrist joints and heavy shoulder joints respond alike, a joint whose inertia drops
+as the arm folds (the YuMi's joint 3 by 4×) keeps its bandwidth, and coupled joints do
+too. Per-joint gains ``m_ii(q) ω²`` give a loop gain ``ω² M⁻¹ diag(M)`` instead, whose
+eigenvalues grow without bound near a pose where two joint axes align (the Panda's
+joints 1 and 3 at q₂ = 0: the excitation of its joint 2 ran away at 4.3 rad/s).
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ from leadthrough.model.dynamics import Dynamics
 
 
 class JointTracker:
-    """Tracks joint references with inverse-dynamics feed-forward and a PD loop.
+    """Tracks joint references with computed torque: inverse dynamics of a PD's acceleration.
 
     Args:
         dynamics: Model of the arm.
@@ -43,7 +46,11 @@ class JointTracker:
         self.kp, self.kd = self.gains(np.diag(dynamics.mass(pose)))
 
     def gains(self, inertia: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """``(K_P [Nm/rad], K_D [Nm s/rad])`` for the joint inertias ``m_ii`` [kg m²]."""
+        """``(K_P [Nm/rad], K_D [Nm s/rad])`` for the inertias ``inertia`` [kg m²].
+
+        The diagonal of M gives each joint's own gains (:attr:`kp`, :attr:`kd`), M itself
+        the matrices :meth:`torque` uses.
+        """
         return inertia * self._stiffness, inertia * self._damping
 
     def torque(
@@ -56,7 +63,6 @@ class JointTracker:
     ) -> FloatArray:
         """Command [Nm] for measured q [rad], q̇ [rad/s] and the reference (q, q̇, q̈)."""
         q = np.asarray(q, dtype=float)
-        mass = self.dynamics.mass(q)
-        kp, kd = self.gains(np.diag(mass))
-        feed_forward = self.dynamics.gravity(q) + mass @ np.asarray(qdd_ref)
-        return feed_forward + kp * (q_ref - q) + kd * (np.asarray(qd_ref) - qd)
+        wanted = (np.asarray(qdd_ref) + self._stiffness * (np.asarray(q_ref) - q)
+                  + self._damping * (np.asarray(qd_ref) - np.asarray(qd)))  # fmt: skip
+        return self.dynamics.gravity(q) + self.dynamics.mass(q) @ wanted

@@ -40,6 +40,7 @@ from leadthrough.errors import ParameterError
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray
 from leadthrough.model.dynamics import Dynamics
+from leadthrough.model.snapshot import ModelSnapshot
 from leadthrough.validation import real
 
 Variant = Literal["two_level", "time_varying"]
@@ -177,26 +178,30 @@ class MomentumObserver:
 
     # --- the filter --------------------------------------------------------------------
 
-    def update(self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike) -> FloatArray:
+    def update(
+        self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, model: ModelSnapshot | None = None
+    ) -> FloatArray:
         """One filter step with the state now and the motor torque of the last period.
 
         Args:
             q: Joint positions [rad].
             qd: Joint velocities [rad/s].
             tau: Motor torque applied over the last period, arm side [Nm] (dither excluded).
+            model: The model at (q, q̇) computed this period (M, G, Cᵀq̇), if the caller
+                has it; else computed here.
 
         Returns:
             The estimated external torque [Nm].
         """
         q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
-        dynamics = self.dynamics
-        momentum = dynamics.mass(q) @ qd
+        if model is None:
+            model = self.dynamics.snapshot(q, qd)
+        momentum = model.mass @ qd
         if self._levels is None:
             friction_mean, friction_std = self.friction.mean_and_std(qd, q)
         else:  # the two-level gains need no friction std
             friction_mean, friction_std = self.friction.mean(qd, q), None
-        drift = dynamics.coriolis_transpose_times_velocity(q, qd) - dynamics.gravity(q)
-        drift -= friction_mean
+        drift = model.coriolis_drift - model.gravity - friction_mean
         if not self._initialised:
             self._p[:] = momentum
             self._previous_drift = drift

@@ -90,7 +90,7 @@ def run_demo(out: Path, robot: RobotDescription, config: TwinConfig = REALISTIC_
     teach_config = replace(config, table=table)
     twin = DigitalTwin(robot, teach_config, ScriptedOperator(teaching_actions(robot)))
     path = out / "session.mcap"
-    controller = LeadThrough(robot, "active", twin.dt, friction)
+    controller = LeadThrough(robot, "active", twin.dt, friction, calibrate=True)
     with SessionRecorder(path, robot, {"mode": "active", "dt": twin.dt}) as recorder:
         taught = simulate(twin, RecordingController(controller, recorder), TEACHING_SECONDS)
     seconds["teaching"] = time.perf_counter() - clock

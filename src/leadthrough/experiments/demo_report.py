@@ -25,7 +25,7 @@ def write_report(result: DemoResult, robot: RobotDescription, out: Path) -> Path
         plt.close(figure)
     picture = _picture(result, robot, out / "arm.png")
     report = out / "report.md"
-    report.write_text(_markdown(result, picture), encoding="utf-8")
+    report.write_text(_markdown(result, picture, robot.name), encoding="utf-8")
     return report
 
 
@@ -47,12 +47,18 @@ def _tool_paths(result: DemoResult, robot: RobotDescription):
     return figure
 
 
-def _operator_torque(result: DemoResult, joints: tuple[int, ...] = (0, 1, 3)):
+def _operator_torque(result: DemoResult):
+    """Every joint's true and estimated operator torque, small multiples in two columns."""
     plt = pyplot()
     sim = result.taught
-    figure, axes = plt.subplots(len(joints), 1, sharex=True, figsize=(10, 2.6 * len(joints)),
-                                constrained_layout=True)  # fmt: skip
-    for axis, j in zip(axes, joints, strict=True):
+    n = sim.tau_ext.shape[1]
+    rows = (n + 1) // 2
+    figure, axes = plt.subplots(rows, 2, sharex=True, figsize=(12, 2.2 * rows),
+                                constrained_layout=True, squeeze=False)  # fmt: skip
+    for j, axis in enumerate(axes.flat):
+        if j >= n:
+            axis.set_visible(False)
+            continue
         estimate, band = result.estimate[:, j], 2.0 * result.estimate_std[:, j]
         axis.fill_between(sim.t, estimate - band, estimate + band, color="tab:blue", alpha=0.15,
                           label="±2 std (the observer's own)")  # fmt: skip
@@ -62,8 +68,12 @@ def _operator_torque(result: DemoResult, joints: tuple[int, ...] = (0, 1, 3)):
                       np.percentile(sim.tau_ext[:, j], 99.5) + 1.5)  # fmt: skip
         axis.set_ylabel(f"joint {j + 1} [Nm]")
         axis.grid(alpha=0.3)
-    axes[0].legend(fontsize="small", ncols=3)
-    axes[-1].set_xlabel("t [s]")
+    axes[0, 0].legend(fontsize="small")
+    for axis in axes[-1]:
+        axis.set_xlabel("t [s]")
+    if n % 2 and rows > 1:  # an empty last cell: the plot above it carries the time axis
+        axes[-2, 1].xaxis.set_tick_params(labelbottom=True)
+        axes[-2, 1].set_xlabel("t [s]")
     return figure
 
 
@@ -98,14 +108,14 @@ def _picture(result: DemoResult, robot: RobotDescription, path: Path) -> str:
     return f"![the arm mid-teaching]({path.name})"
 
 
-def _markdown(result: DemoResult, picture: str) -> str:
+def _markdown(result: DemoResult, picture: str, name: str) -> str:
     errors, sim = result.replay_error, result.taught
     events = [e for e in result.events if e[1] not in ("mode",)]
     event_lines = "\n".join(f"| {t:.2f} | {kind} | {detail} |" for t, kind, detail in events[:20])
     seconds = ", ".join(f"{name} {value:.1f} s" for name, value in result.seconds.items())
-    return f"""# leadthrough demo: teaching the simulated YuMi by hand
+    return f"""# leadthrough demo: teaching the simulated {name} by hand
 
-A simulated operator guides the YuMi twin with **active lead-through**: the controller
+A simulated operator guides the {name} twin with **active lead-through**: the controller
 sees only motor torques and encoders; the operator's torques are estimated by the
 momentum Kalman observer. The session was recorded to `{result.recording_path.name}`
 (MCAP: open it in Foxglove) and replayed.

@@ -7,11 +7,12 @@ A *case* is a sampled plant (:func:`~leadthrough.twin.plants.sample_plant`), a h
 holds the end pose (effort, vibration, peak speed, residual force, observer figures),
 and the hand lets go at 3/4 of the path, while the tool moves (stop time, drift).
 
-The controller is built as a user would: ``lt.LeadThrough(robot, mode=..., dt=0.004)``
-with the nominal description and friction, the start-up calibration included; the hand
-grabs once it is over. ``controller_factory(robot, mode)`` replaces it (any object with
-``step(q, qd, tau_measured)``; ``calibration_time``, ``tau_ext_hat`` and ``std`` are read
-when present), to compare control laws on the same cases.
+The controller is built as a user would: ``lt.LeadThrough(robot, mode=..., dt=0.004,
+calibrate=True)`` with the nominal description and friction, the start-up calibration
+included; the hand grabs once it is over. ``controller_factory(robot, mode)`` replaces it
+(any object with ``step(state)`` or ``step(q, qd, tau_measured)``; ``calibration_time``,
+``tau_ext_hat`` and ``std`` are read when present), to compare control laws on the same
+cases.
 """
 
 from __future__ import annotations
@@ -26,6 +27,8 @@ from leadthrough.control.calibration import CalibrationParameters
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
+from leadthrough.runtime.interface import JointState
+from leadthrough.runtime.loop import stepper
 from leadthrough.twin.operator import During, Hand
 from leadthrough.twin.paths import Circle, Line, Path
 from leadthrough.twin.plants import sample_plant
@@ -142,8 +145,8 @@ def case_path(robot: RobotDescription, name: str, start: FloatArray | None = Non
 
 
 def default_factory(robot: RobotDescription, mode: str) -> LeadThrough:
-    """What a user writes: ``LeadThrough(robot, mode=mode, dt=0.004)``, all defaults."""
-    return LeadThrough(robot, mode=mode, dt=0.004)  # type: ignore[arg-type]
+    """What a user writes: ``LeadThrough(robot, mode=mode, dt=0.004, calibrate=True)``."""
+    return LeadThrough(robot, mode=mode, dt=0.004, calibrate=True)  # type: ignore[arg-type]
 
 
 class _Recorder:
@@ -151,15 +154,19 @@ class _Recorder:
 
     def __init__(self, controller: Any) -> None:
         self.controller = controller
+        self.dt = getattr(controller, "dt", None)  # the control loop checks it
+        self.supervisor = getattr(controller, "supervisor", None)  # and stops through it
+        self._step = stepper(controller)  # step(state) or step(q, qd, tau_measured)
         self.estimate: list[FloatArray] = []
         self.std: list[FloatArray] = []
 
-    def step(self, q: FloatArray, qd: FloatArray, tau_measured: FloatArray) -> FloatArray:
-        command = self.controller.step(q, qd, tau_measured)
+    def step(self, state: JointState) -> FloatArray:
+        command = self._step(state)
         estimate = getattr(self.controller, "tau_ext_hat", None)
         std = getattr(self.controller, "std", None)
-        self.estimate.append(np.full(len(q), np.nan) if estimate is None else np.array(estimate))
-        self.std.append(np.full(len(q), np.nan) if std is None else np.array(std))
+        n = len(state.q)
+        self.estimate.append(np.full(n, np.nan) if estimate is None else np.array(estimate))
+        self.std.append(np.full(n, np.nan) if std is None else np.array(std))
         return command
 
 

@@ -1,4 +1,4 @@
-"""``leadthrough experiments``: every experiment of SPEC §12 from the twin, in one report.
+"""``leadthrough experiments``: the thesis' experiments (chapters 4-6) on the twin, one report.
 
 :func:`run_experiments` computes (a :class:`ThesisExperiments`); :func:`write_experiments`
 draws the figures and writes the Markdown report (``make docs`` reuses both).

@@ -1,7 +1,18 @@
-"""Teach and replay on the twin: recording a guided session, replaying a recording."""
+"""Teach and replay on the twin: recording a guided session, replaying a recording.
+
+Work is bounded: a session or a replay simulates at most :data:`MAX_SECONDS`, and a replay's
+time scale lies in :data:`TIME_SCALE_RANGE`. Nothing is partial in silence: teaching without
+identified friction warns, and a recording recovered from a damaged or unfinished file is
+replayed only when asked for (``partial=True``).
+"""
 
 from __future__ import annotations
 
+import signal
+import threading
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 
@@ -9,39 +20,50 @@ import numpy as np
 
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.control.replay import Replayer, plan_replay, replay_errors
+from leadthrough.errors import ParameterError, RecordingError
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
+from leadthrough.runtime.interface import JointState
 from leadthrough.runtime.recording import SessionRecorder, read_recording
+from leadthrough.runtime.teaching import TeachingSession
 from leadthrough.twin.operator import During
 from leadthrough.twin.presets import REALISTIC_TWIN
 from leadthrough.twin.runner import SimulationResult, simulate
 from leadthrough.twin.scenarios import scenario
 from leadthrough.twin.simulator import DigitalTwin
+from leadthrough.validation import real
+
+#: Longest simulated session or replay [s] (results take about 0.3 MB per simulated second).
+MAX_SECONDS = 600.0
+#: Bounds of a replay's time scale, replay duration over taught duration [–].
+TIME_SCALE_RANGE = (0.05, 20.0)
 
 
-class RecordingController:
-    """Runs a LeadThrough and records every period taught, and the supervisor's events.
+class UnidentifiedFrictionWarning(UserWarning):
+    """Teaching uses the robot file's nominal friction, not an identified model."""
+
+
+class RecordingController(TeachingSession):
+    """A :class:`~leadthrough.runtime.teaching.TeachingSession` that Ctrl-C ends between periods.
 
     The start-up calibration's motion is not part of what was taught: it is not recorded.
     """
 
     def __init__(self, controller: LeadThrough, recorder: SessionRecorder) -> None:
-        self.controller, self.recorder = controller, recorder
-        self._time, self._events = 0.0, 0
+        super().__init__(controller, recorder)
+        self.interrupted = False  # set by Ctrl-C: the next period stops the session
 
-    def step(self, q: FloatArray, qd: FloatArray, tau_measured: FloatArray) -> FloatArray:
-        """Control and record one period."""
-        command = self.controller.step(q, qd, tau_measured)
-        c = self.controller
-        if not c.calibrating:
-            self.recorder.record(self._time, q, qd, tau_measured, c.tau_ext_hat, c.std, c.mode,
-                                 c.state.value)  # fmt: skip
-        for event in c.supervisor.events[self._events :]:
-            self.recorder.event(event.t, event.kind, event.detail)
-        self._events = len(c.supervisor.events)
-        self._time += c.dt
-        return command
+    def step(self, state: JointState) -> FloatArray:
+        """Control and record one period.
+
+        Raises:
+            KeyboardInterrupt: :attr:`interrupted` was set (Ctrl-C): raised between two periods,
+                so that every period recorded is whole.
+        """
+        if self.interrupted:
+            raise KeyboardInterrupt
+        return super().step(state)
 
 
 def teach_on_twin(
@@ -52,21 +74,90 @@ def teach_on_twin(
     duration: float | None = None,
     friction_file: Path | None = None,
     seed: int = 0,
+    *,
+    overwrite: bool = False,
 ) -> str:
-    """A simulated hand guides the twin along ``path``; record it to ``out``; a summary."""
+    """A simulated hand guides the twin along ``path``; record it to ``out``; a summary.
+
+    Args:
+        robot: The arm taught.
+        out: The recording to write (MCAP).
+        path: Scenario the simulated hand follows: ``line``, ``circle`` or ``point_to_point``.
+        mode: ``active`` or ``passive`` lead-through.
+        duration: Seconds taught after the start-up calibration, in (0, MAX_SECONDS]
+            (default: the path's).
+        friction_file: Identified friction (TOML); without it the robot file's nominal
+            friction is used and an :class:`UnidentifiedFrictionWarning` says so.
+        seed: Seed of the twin's noise.
+        overwrite: Replace an existing recording ``out`` (else a RecordingError).
+
+    Raises:
+        KeyboardInterrupt: Ctrl-C; the message says where the (complete) recording of what was
+            taught until then is.
+    """
+    if duration is not None:
+        real("duration", duration, minimum=0.0, strict=True, error=ParameterError)
+        _at_most("duration", duration, MAX_SECONDS)
+    if out.exists() and not overwrite:
+        raise RecordingError(str(out), "exists; pass overwrite=True (--force) to replace it")
     friction = FrictionModel.load(friction_file) if friction_file else None
+    if friction is None:
+        warnings.warn(f"no identified friction: teaching {robot.name} with its file's nominal "
+                      "friction, which makes guiding heavier; identify it first (leadthrough "
+                      "identify) and pass the friction.toml (--friction)",
+                      UnidentifiedFrictionWarning, stacklevel=2)  # fmt: skip
     chosen = scenario(path, robot, replace(REALISTIC_TWIN, seed=seed))
-    controller = LeadThrough(robot, mode, chosen.config.control_dt, friction)
+    controller = LeadThrough(robot, mode, chosen.config.control_dt, friction, calibrate=True)
     grab = controller.calibration_time  # the hand grabs the arm once it is ready
     twin = DigitalTwin(robot, chosen.config, During(chosen.operator, grab), chosen.q0)
     out.parent.mkdir(parents=True, exist_ok=True)
     with SessionRecorder(out, robot, {"mode": mode, "path": path, "dt": twin.dt}) as recorder:
-        sim = simulate(twin, RecordingController(controller, recorder),
-                       grab + (duration or chosen.duration))  # fmt: skip
+        recording = RecordingController(controller, recorder)
+        try:
+            with _stop_on_ctrl_c(recording):
+                sim = simulate(twin, recording, grab + (duration or chosen.duration))
+        except KeyboardInterrupt:
+            recording.interrupted = True
+        if recording.interrupted:  # the control loop may also end normally on Ctrl-C
+            recorder.event(recording.time, "interrupted", "Ctrl-C: the session was ended")
+    if recording.interrupted:
+        raise KeyboardInterrupt(_interrupted(out, recording.recorded, controller.dt))
+    if recording.recorded == 0:
+        events = controller.supervisor.events
+        why = events[-1].detail if events else "the session ended before the calibration did"
+        raise RecordingError(str(out), f"nothing was taught or recorded ({why})")
     force = sim.operator_force
-    return (f"taught '{path}' in {mode} mode: {len(sim.t)} samples, operator force RMS "
+    return (f"taught '{path}' in {mode} mode: {recording.recorded} samples, operator force RMS "
             f"{np.sqrt(np.mean(force**2)):.2f} N (peak {force.max():.1f} N), supervisor "
             f"{controller.state.value}\nrecording: {out}")  # fmt: skip
+
+
+def _at_most(name: str, value: float, limit: float) -> None:
+    if value > limit:
+        raise ParameterError(name, f"at most {limit:g} s of simulation, got {value:.4g} s")
+
+
+@contextmanager
+def _stop_on_ctrl_c(recording: RecordingController) -> Iterator[None]:
+    """Ctrl-C stops the session between two periods (in the main thread; elsewhere as usual)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def stop(signum: int, frame: object) -> None:
+        recording.interrupted = True
+
+    previous = signal.signal(signal.SIGINT, stop)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _interrupted(out: Path, recorded: int, dt: float) -> str:
+    if recorded == 0:
+        return f"during the start-up calibration: nothing was taught ({out} holds no samples)"
+    return f"the {recorded * dt:.1f} s taught so far are recorded, complete, in {out}"
 
 
 def replay_recording(
@@ -90,15 +181,43 @@ def replay_recording(
     return sim, errors, replayer
 
 
-def replay_on_twin(recording_path: Path, out: Path, time_scale: float = 1.0, seed: int = 0) -> str:
-    """Replay a recording on the twin; write a figure; a summary with the errors."""
+def replay_on_twin(
+    recording_path: Path,
+    out: Path,
+    time_scale: float = 1.0,
+    seed: int = 0,
+    *,
+    partial: bool = False,
+) -> str:
+    """Replay a recording on the twin; write a figure; a summary with the errors.
+
+    Args:
+        recording_path: The recording (MCAP).
+        out: Directory of the figure.
+        time_scale: Replay duration over taught duration, within TIME_SCALE_RANGE; the replay
+            simulates at most MAX_SECONDS.
+        partial: Replay what was recovered of an unfinished or damaged recording (else such a
+            recording is a RecordingError that says how much of it was recovered).
+        seed: Seed of the twin's noise (the twin runs with ``seed + 1``).
+    """
+    low, high = TIME_SCALE_RANGE
+    real("time_scale", time_scale, minimum=low, error=ParameterError)
+    if time_scale > high:
+        raise ParameterError("time_scale", f"must be at most {high:g}, got {time_scale:g}")
     recording = read_recording(recording_path)
+    if not recording.complete and not partial:
+        raise RecordingError(str(recording_path), f"{recording.recovery}; replay what was "
+                             "recovered with --partial (partial=True)")  # fmt: skip
+    if len(recording.t) < 2:
+        raise RecordingError(str(recording_path), f"holds {len(recording.t)} samples: nothing "
+                             "to replay")  # fmt: skip
+    _at_most("replay", time_scale * float(recording.t[-1] - recording.t[0]), MAX_SECONDS)
     config = replace(REALISTIC_TWIN, seed=seed + 1)
     sim, errors, _ = replay_recording(recording.robot, recording.t, recording.q, None, config,
                                       time_scale)  # fmt: skip
     out.mkdir(parents=True, exist_ok=True)
     _figure(recording.robot, recording.q, sim, out / "replay.png")
-    partial = "" if recording.complete else " (recovered from an unfinished recording)"
+    partial = "" if recording.complete else f" ({recording.recovery})"
     joint, tool = 1000 * errors["joint_rms"], 1000 * errors["tool_rms"]
     return (f"replayed {recording_path}{partial}: joint RMS {joint:.2f} mrad, tool RMS "
             f"{tool:.2f} mm\nfigure: {out / 'replay.png'}")  # fmt: skip

@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from leadthrough.errors import ParameterError
-from leadthrough.filters import low_pass
+from leadthrough.filters import low_pass, pole
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray
 from leadthrough.validation import real
@@ -66,16 +66,24 @@ def coulomb_compensation(
 class CoulombCompensation:
     """The filtered compensation torque, one control period at a time.
 
+    The torque is low-passed with the thesis' filter, defined by its time constant
+    (:data:`~leadthrough.filters.TIME_CONSTANT`, 7.8 ms): its pole follows ``dt``.
+
     Args:
         friction: Friction model whose τ_C(q) is compensated.
         parameters: ε, q̇₀, q̇₁.
+        dt: Control period [s].
     """
 
     def __init__(
-        self, friction: FrictionModel, parameters: CoulombCompensationParameters | None = None
+        self,
+        friction: FrictionModel,
+        parameters: CoulombCompensationParameters | None = None,
+        dt: float = 0.004,
     ) -> None:
         self.friction = friction
         self.parameters = parameters or CoulombCompensationParameters()
+        self._pole = pole(dt)
         self._torque = np.zeros(friction.n_joints)
 
     def reset(self) -> None:
@@ -97,5 +105,5 @@ class CoulombCompensation:
         band = p.dead_band if dead_band is None else np.asarray(dead_band, dtype=float)
         full = np.maximum(p.full_velocity, 2.0 * np.asarray(band))
         raw = coulomb_compensation(qd, self.friction.coulomb_level(q), p.fraction, band, full)
-        self._torque = low_pass(self._torque, raw)
+        self._torque = low_pass(self._torque, raw, self._pole)
         return self._torque.copy()

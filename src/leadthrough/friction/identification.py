@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from leadthrough.errors import LeadthroughError
-from leadthrough.filters import low_pass_signal
+from leadthrough.filters import low_pass_signal, pole
 from leadthrough.friction.model import FrictionModel, sigmoid
 from leadthrough.model.description import FloatArray
 from leadthrough.model.dynamics import Dynamics
@@ -210,7 +210,8 @@ def _log_samples(
             raise IdentificationError(f"log {index}: '{name}' is not finite at {where}")
     if np.any(np.diff(t) <= 0):
         raise IdentificationError(f"log {index}: 't' must increase strictly")
-    q_f, qd_f, tau_f = (low_pass_signal(x) for x in (q, qd, tau))
+    smoothing = pole(float(np.median(np.diff(t))))  # the thesis' 7.8 ms at the log's rate
+    q_f, qd_f, tau_f = (low_pass_signal(x, smoothing) for x in (q, qd, tau))
     qdd = np.gradient(qd_f, t, axis=0)
     rigid = np.array([dynamics.inverse_dynamics(*row) for row in zip(q_f, qd_f, qdd, strict=True)])
     moved = np.abs(qd_f).max(axis=0) > settings.moving_velocity

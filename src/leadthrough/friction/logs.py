@@ -7,6 +7,7 @@ Both formats carry the same columns: ``run`` (an integer per sample naming the r
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -73,7 +74,11 @@ def _read_npz(path: Path) -> dict[str, np.ndarray]:
 def _read_csv(path: Path) -> dict[str, np.ndarray]:
     with path.open(encoding="utf-8") as file:
         header = file.readline().strip().split(",")
-    table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    with warnings.catch_warnings():  # an empty table is the error below, not a warning
+        warnings.simplefilter("ignore", UserWarning)
+        table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    if table.size == 0:
+        raise ValueError("no data rows after the header line run,t,q1..,qd1..,tau1..")
     if table.shape[1] != len(header):
         raise ValueError(f"{table.shape[1]} columns but {len(header)} names in the header")
     column = {name: table[:, i] for i, name in enumerate(header)}

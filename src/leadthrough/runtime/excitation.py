@@ -157,8 +157,10 @@ def _run_wave(
         q_ref[joint], qd_ref[joint], qdd_ref[joint] = start[joint] + offset, velocity, acceleration
         robot.send_torque(tracker.torque(state.q, state.qd, q_ref, qd_ref, qdd_ref))
         state = robot.read_state()
-        for name, value in (("t", state.t - t0), ("q", state.q), ("qd", state.qd),
-                            ("tau", state.tau_measured)):  # fmt: skip
+        tau = state.tau_measured
+        if tau is None:
+            raise ParameterError("robot", "stopped measuring its torques during an excitation")
+        for name, value in (("t", state.t - t0), ("q", state.q), ("qd", state.qd), ("tau", tau)):
             log[name].append(value)
         if progress:
             progress.advance(robot.dt)

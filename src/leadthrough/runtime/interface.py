@@ -15,29 +15,14 @@ controller object runs in tests, against the twin and on a robot::
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
 from typing import Protocol
 
 from numpy.typing import ArrayLike
 
+from leadthrough.logs.sample import JointState
 from leadthrough.model.description import FloatArray
 
-
-@dataclass(frozen=True, eq=False)
-class JointState:
-    """One sample of the joint sensors.
-
-    Attributes:
-        t: Time of the sample [s].
-        q: Joint readings (encoders, quantised) [rad], shape (n,).
-        qd: Joint velocities as the robot reports them (noisy) [rad/s], shape (n,).
-        tau_measured: Motor torque actually applied, as measured, arm side [Nm], shape (n,).
-    """
-
-    t: float
-    q: FloatArray
-    qd: FloatArray
-    tau_measured: FloatArray
+__all__ = ["Controller", "JointState", "RobotInterface"]
 
 
 class Controller(Protocol):

@@ -1,33 +1,45 @@
 """The control loop on a robot: read, step, send, once per period, timed and safe (SPEC §7).
 
-One function drives any supervised controller (:class:`~leadthrough.LeadThrough`, a
-replay) on any :class:`~leadthrough.runtime.interface.RobotInterface` (a hardware driver, the
-twin)::
+The only loop: hardware, the twin (:func:`leadthrough.twin.runner.simulate`), teaching,
+replay, the experiments and the demo all run through it, so the path that runs on a
+robot is the path the tests run. It drives any controller (:class:`~leadthrough.LeadThrough`,
+a replay) on any :class:`~leadthrough.runtime.interface.RobotInterface` (a hardware driver,
+the twin)::
 
     arm = lt.robots.yumi()
-    driver = MyYuMiDriver(...)                  # implements RobotInterface
-    report = lt.control_loop(driver, lt.LeadThrough(arm), duration=60.0)
+    driver = MyYuMiDriver(...)                  # implements RobotInterface, dt = its period
+    report = lt.control_loop(driver, lt.LeadThrough(arm, dt=driver.dt), duration=60.0)
     print(report.summary())
 
+The robot's sample (:class:`JointState`, with the robot's time stamp) is handed to the
+controller as it is (``step(state)``; a controller whose ``step`` takes (q, q̇, τ) gets
+those), so the robot's clock is the controller's. A controller with a ``dt`` must run at
+the robot's period (a 4 ms controller on a 1 ms robot is refused).
+
 Each period the controller's compute time is measured, from the sample arriving to the
-command leaving; one longer than the period is a missed deadline, counted and logged by
-the controller's supervisor (``supervisor.record_cycle``). What runs after the command is
-sent (``after_period``, e.g. a recorder) is off the critical path.
+command leaving; on a robot with a wall clock one longer than the period is a missed
+deadline, counted and logged by the controller's supervisor (``supervisor.record_cycle``).
+A simulated driver (``wall_clock=False``) paces nothing in real time: compute times are
+still measured and reported, not held against the period. What runs after the command
+is sent (``after_period``, e.g. a recorder) is off the critical path.
 
 No exception escapes without the safe stop first: on Ctrl-C, an error of the robot, the
 controller or ``after_period``, the supervisor latches a fault naming the cause, the arm
 gets the safe stop (braking, then gravity hold) for ``stop_time`` and the robot is closed
-(brakes on). Ctrl-C then ends the loop normally (``report.ended`` says so); any other
-error is raised again.
+(brakes on); a safe stop that cannot be sent is logged as a ``safe_stop_failed`` event.
+Ctrl-C then ends the loop normally (``report.ended`` says so); any other error is raised
+again. A controller without a supervisor gets no safe stop: the robot is closed.
 """
 
 from __future__ import annotations
 
+import inspect
+import math
 import time
 from array import array
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -43,8 +55,8 @@ class SupervisedController(Protocol):
 
     supervisor: SafetySupervisor
 
-    def step(self, q: FloatArray, qd: FloatArray, tau_measured: FloatArray | None) -> FloatArray:
-        """Torque command [Nm] for the state q [rad], q̇ [rad/s], τ [Nm]."""
+    def step(self, state: JointState) -> FloatArray:
+        """Torque command [Nm] for the robot's sample (t [s], q [rad], q̇ [rad/s], τ [Nm])."""
         ...
 
 
@@ -54,7 +66,8 @@ class LoopReport:
 
     Attributes:
         periods: Control periods run (the safe stop after an interruption not included).
-        overruns: Periods whose compute time exceeded the control period.
+        overruns: Periods whose compute time exceeded the control period (0 without a
+            wall clock).
         compute_median: Median compute time of one period [s].
         compute_max: Longest compute time of one period [s].
         period: The control period [s].
@@ -78,46 +91,58 @@ class LoopReport:
 
 def control_loop(
     robot: RobotInterface,
-    controller: SupervisedController,
+    controller: Any,
     duration: float | None = None,
     until: Callable[[JointState], bool] | None = None,
     after_period: Callable[[JointState, FloatArray], None] | None = None,
     stop_time: float = 0.5,
+    wall_clock: bool = True,
 ) -> LoopReport:
     """Run ``controller`` on ``robot`` until ``duration`` has passed or ``until`` says so.
 
     Args:
         robot: The robot; ``send_torque`` returns when the next sample is due.
-        controller: Supervised controller, stepped once per period.
+        controller: Stepped once per period with the robot's sample (see the module
+            docstring); with a ``supervisor``, its deadlines and safe stop are used.
         duration: How long to run [s]; None runs until ``until`` or Ctrl-C.
         until: Called with each new sample; True ends the loop (before stepping).
         after_period: Called after each command is sent, with the sample and the command
             (recording, display); its errors bring the safe stop like any other.
         stop_time: How long the safe stop is commanded after an interruption [s].
+        wall_clock: Whether the robot runs in real time (hardware): then a compute time
+            above the period is an overrun. False for a simulated driver (the twin).
 
     Returns:
         What happened; the robot is left commanded (not closed) when the loop ends
         normally, safe-stopped and closed when it was interrupted.
+
+    Raises:
+        ParameterError: A bad duration or stop time, or a controller whose ``dt`` is not
+            the robot's period.
     """
     real("stop_time", stop_time, minimum=0.0, error=ParameterError)
     if duration is not None:
         real("duration", duration, minimum=0.0, error=ParameterError)
+    check_period(controller, robot)
+    step = stepper(controller)
     periods = None if duration is None else round(duration / robot.dt)
-    supervisor = controller.supervisor
-    overruns_before = supervisor.overruns
+    supervisor: SafetySupervisor | None = getattr(controller, "supervisor", None)
+    overruns_before = supervisor.overruns if supervisor is not None else 0
     compute = array("d")
-    ended, k = "finished", 0
+    ended, k, t = "finished", 0, None
     try:
         state = robot.read_state()
         while periods is None or k < periods:
+            t = state.t
             if until is not None and until(state):
                 ended = "stopped"
                 break
             start = time.perf_counter()
-            command = controller.step(state.q, state.qd, state.tau_measured)
+            command = step(state)
             elapsed = time.perf_counter() - start
             robot.send_torque(command)
-            supervisor.record_cycle(state.t, elapsed)
+            if wall_clock and supervisor is not None:
+                supervisor.record_cycle(state.t, elapsed)
             compute.append(elapsed)
             k += 1
             if after_period is not None:
@@ -125,12 +150,43 @@ def control_loop(
             state = robot.read_state()
     except BaseException as error:  # Ctrl-C included: the safe stop comes first
         ended = _interruption(error)
-        _safe_stop(robot, supervisor, ended, stop_time)
+        if supervisor is None:
+            robot.close()
+        else:
+            _safe_stop(robot, supervisor, ended, stop_time, t)
         if not isinstance(error, KeyboardInterrupt):
             raise
     times = np.frombuffer(compute, dtype=float) if compute else np.zeros(1)
-    return LoopReport(k, supervisor.overruns - overruns_before, float(np.median(times)),
-                      float(times.max()), robot.dt, ended)  # fmt: skip
+    overruns = supervisor.overruns - overruns_before if supervisor is not None else 0
+    return LoopReport(k, overruns, float(np.median(times)), float(times.max()), robot.dt,
+                      ended)  # fmt: skip
+
+
+def check_period(controller: object, robot: RobotInterface) -> None:
+    """Raise ParameterError (one line) when ``controller.dt`` is not the robot's period."""
+    dt = getattr(controller, "dt", None)
+    if dt is None or math.isclose(float(dt), float(robot.dt), rel_tol=1e-9, abs_tol=1e-12):
+        return
+    raise ParameterError("dt", f"the controller runs at {1e3 * dt:g} ms, the robot at "
+                         f"{1e3 * robot.dt:g} ms: build it with dt=robot.dt")  # fmt: skip
+
+
+def stepper(controller: Any) -> Callable[[JointState], FloatArray]:
+    """``controller.step`` as a function of the robot's sample.
+
+    ``step(state)`` when it takes one argument (the robot's time stamp reaches it), else
+    ``step(q, qd, tau_measured)``.
+    """
+    step = controller.step
+    try:
+        parameters = list(inspect.signature(step).parameters.values())
+    except (TypeError, ValueError):  # no signature to read: the positional form
+        parameters = []
+    positional = (inspect.Parameter.POSITIONAL_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)
+    required = [p for p in parameters if p.kind in positional and p.default is p.empty]
+    if len(required) == 1:
+        return step  # type: ignore[no-any-return]
+    return lambda state: step(state.q, state.qd, state.tau_measured)
 
 
 def _interruption(error: BaseException) -> str:
@@ -140,16 +196,26 @@ def _interruption(error: BaseException) -> str:
 
 
 def _safe_stop(
-    robot: RobotInterface, supervisor: SafetySupervisor, reason: str, stop_time: float
+    robot: RobotInterface,
+    supervisor: SafetySupervisor,
+    reason: str,
+    stop_time: float,
+    t: float | None,
 ) -> None:
-    """Latch the fault, command the supervisor's safe stop for ``stop_time``, close the robot."""
-    supervisor.stop(reason)
+    """Latch the fault, command the supervisor's safe stop for ``stop_time``, close the robot.
+
+    ``t`` is the time of the latest sample [s] on the robot's clock: the damped phase
+    of the safe stop counts from it. A safe stop that cannot be sent (the robot gone) is
+    logged as a ``safe_stop_failed`` event; the robot's brakes are then all there is.
+    """
+    supervisor.stop(reason, t)
     try:
         nothing = np.zeros(robot.n_joints)
         for _ in range(max(1, round(stop_time / robot.dt))):
             state = robot.read_state()
             robot.send_torque(supervisor.command(state.t, state.q, state.qd, nothing))
-    except Exception:  # a robot that cannot be commanded any more: its brakes are all we have
-        pass
+    except Exception as error:
+        supervisor.log("safe_stop_failed", f"the safe stop could not be sent: "
+                       f"{type(error).__name__}: {error}; closing the robot")  # fmt: skip
     finally:
         robot.close()

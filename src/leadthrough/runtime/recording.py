@@ -5,14 +5,18 @@ MCAP (https://mcap.dev; Foxglove opens it as is), JSON messages with JSON schema
 - metadata ``session``: ``robot`` (TOML), ``parameters`` (JSON), ``version``, ``start_time``;
 - ``/joint_state``, one message per control period: ``t`` [s], ``q`` [rad], ``qd`` [rad/s],
   ``tau``, ``tau_ext_hat``, ``tau_ext_std`` [Nm, arm side], ``mode``, ``state`` (a non-finite
-  number is written ``null``, read back NaN); log time = wall-clock start + ``t``;
+  number is written ``null``, read back NaN), and when given the estimated tool wrench at
+  the TCP, ``tool_wrench`` (force [N], torque [Nm], world axes) with its 6×6
+  ``tool_wrench_covariance`` (row-major); log time = wall-clock start + ``t``;
 - ``/event``: ``t`` [s], ``kind``, ``detail`` (supervisor and session events).
 
 Crash safety: the recorder writes ``<path>.part``, metadata first (fsynced at open); the open
 chunk is closed, flushed and fsynced as soon as it spans ``flush_period`` of session time, so a
 crash or SIGKILL loses less than the last ``flush_period``. :meth:`SessionRecorder.close` writes
 the summary and footer, then renames ``.part`` to ``path`` atomically. :func:`read_recording`
-streams any file up to its first unreadable record (``complete=False`` if unfinished).
+streams any file up to its first unreadable record (``complete=False`` if unfinished or
+damaged; :attr:`Recording.recovery` then says how much was recovered, of how much when the
+file's summary survived, and where reading stopped).
 """
 
 from __future__ import annotations
@@ -23,7 +27,7 @@ import struct
 import time
 import tomllib
 from contextlib import suppress
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from importlib.metadata import version
 from pathlib import Path
@@ -33,12 +37,14 @@ import numpy as np
 import tomli_w
 import zstandard
 from mcap.exceptions import McapError
-from mcap.records import Channel, Footer, Message, Metadata
+from mcap.reader import make_reader
+from mcap.records import Channel, Footer, Message, Metadata, Statistics
 from mcap.stream_reader import StreamReader
 from mcap.writer import MCAP0_MAGIC, CompressionType, Writer
 from numpy.typing import ArrayLike
 
 from leadthrough.errors import InputShapeError, LeadthroughError, ParameterError, RecordingError
+from leadthrough.estimation.wrench import ToolWrench
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.robots.toml_format import robot_from_dict, robot_to_dict
 from leadthrough.validation import real
@@ -68,6 +74,11 @@ JOINT_STATE_SCHEMA = _schema(
     mode=_TEXT | {"description": "lead-through mode"},
     state=_TEXT | {"description": "safety supervisor state"},
 )
+JOINT_STATE_SCHEMA["properties"] |= {  # optional: files written before have no wrench
+    "tool_wrench": _NUMBERS | {"description": "tool wrench at the TCP, world axes [N, Nm]"},
+    "tool_wrench_covariance": _NUMBERS
+    | {"description": "its covariance, 6×6 row-major [N², N Nm, Nm²]"},
+}
 EVENT_SCHEMA = _schema("leadthrough.Event", t=_TIME, kind=_TEXT, detail=_TEXT)
 #: What a damaged file can make the MCAP stream reader raise.
 _READ_ERRORS = (McapError, ValueError, struct.error, zstandard.ZstdError)
@@ -143,6 +154,7 @@ class SessionRecorder:
         tau_ext_std: ArrayLike,
         mode: str,
         state: str,
+        tool_wrench: ToolWrench | None = None,
     ) -> None:
         """Record one control period.
 
@@ -155,11 +167,16 @@ class SessionRecorder:
             tau_ext_std: Standard deviation of ``tau_ext_hat`` [Nm], shape (n,).
             mode: Lead-through mode, e.g. ``"active"``.
             state: Safety supervisor state, e.g. ``"teaching"``.
+            tool_wrench: Estimated wrench at the TCP with its covariance
+                (``LeadThrough.tool_wrench``), if any.
         """
         values = (q, qd, tau, tau_ext_hat, tau_ext_std)
         fields = {
             name: self._numbers(name, value) for name, value in zip(ARRAYS, values, strict=True)
         }
+        if tool_wrench is not None:
+            fields["tool_wrench"] = _finite_or_null(tool_wrench.vector)
+            fields["tool_wrench_covariance"] = _finite_or_null(tool_wrench.covariance.ravel())
         self._write(self._joint_state, t, fields | {"mode": str(mode), "state": str(state)})
 
     def event(self, t: float, kind: str, detail: str) -> None:
@@ -197,9 +214,7 @@ class SessionRecorder:
         array = np.asarray(value, dtype=float)
         if array.shape != (self.robot.n_joints,):
             raise InputShapeError(name, (self.robot.n_joints,), array.shape)
-        if np.isfinite(array).all():
-            return array.tolist()
-        return [x if np.isfinite(x) else None for x in array.tolist()]
+        return _finite_or_null(array)
 
     def _write(self, channel: int, t: float, fields: dict[str, Any]) -> None:
         if self._closed:
@@ -242,6 +257,12 @@ class Recording:
         version: leadthrough version that wrote the file.
         start_time: Wall-clock start of the session, ISO 8601.
         complete: False if recovered from an unfinished, truncated or damaged file.
+        tool_wrench: Estimated tool wrench at the TCP, world axes [N, Nm], shape (N, 6);
+            NaN where not recorded.
+        tool_wrench_covariance: Its covariance [N², N Nm, Nm²], shape (N, 6, 6); NaN where
+            not recorded.
+        recovery: Empty if complete; else one line saying how much was recovered (of how
+            much, when the file's summary survived) and where the file stops being readable.
     """
 
     t: FloatArray
@@ -258,6 +279,9 @@ class Recording:
     version: str
     start_time: str
     complete: bool
+    recovery: str = ""
+    tool_wrench: FloatArray = field(default_factory=lambda: np.zeros((0, 6)))
+    tool_wrench_covariance: FloatArray = field(default_factory=lambda: np.zeros((0, 6, 6)))
 
 
 def read_recording(path: str | os.PathLike[str]) -> Recording:
@@ -273,26 +297,60 @@ def read_recording(path: str | os.PathLike[str]) -> Recording:
             if stream.read(len(MCAP0_MAGIC)) != MCAP0_MAGIC:
                 raise RecordingError(str(path), "not an MCAP file (no MCAP magic bytes)")
             stream.seek(0)
-            records, complete = _read_records(stream)
+            records, complete, readable = _read_records(stream)
+            size = stream.seek(0, os.SEEK_END)
+            expected = None if complete else _summary_statistics(stream)
     except OSError as error:
         raise RecordingError(str(path), f"cannot read: {error.strerror}") from None
     try:
-        return _assemble(records, complete)
+        recording = _assemble(records, complete)
     except (LeadthroughError, ValueError, TypeError, KeyError) as error:
         message = " ".join(str(error).split())
         raise RecordingError(str(path), f"not a readable leadthrough session: {message}") from None
+    if complete:
+        return recording
+    return replace(recording, recovery=_recovery(recording, records, readable, size, expected))
 
 
-def _read_records(stream: Any) -> tuple[list[Any], bool]:
-    """Every record readable from the start of ``stream``; whether the footer was reached."""
+def _read_records(stream: Any) -> tuple[list[Any], bool, int]:
+    """Records readable from the start; whether the footer was reached; bytes read cleanly."""
     reader = StreamReader(stream, validate_crcs=True, record_size_limit=1 << 28)
     records: list[Any] = []
+    readable = 0
     try:
         for record in reader.records:
             records.append(record)
+            readable = stream.tell()
     except _READ_ERRORS:
-        return records, False
-    return records, any(isinstance(record, Footer) for record in records)
+        return records, False, readable
+    return records, any(isinstance(record, Footer) for record in records), readable
+
+
+def _summary_statistics(stream: Any) -> Statistics | None:
+    """The statistics of a damaged file's summary section, if it survived (else None)."""
+    try:
+        stream.seek(0)
+        summary = make_reader(stream).get_summary()
+    except (*_READ_ERRORS, OSError, EOFError):
+        return None
+    return None if summary is None else summary.statistics
+
+
+def _recovery(recording: Recording, records: list[Any], readable: int, size: int,
+              statistics: Statistics | None) -> str:  # fmt: skip
+    """One line: how much of a damaged or unfinished recording was recovered, and why."""
+    periods = len(recording.t)
+    seconds = float(recording.t[-1] - recording.t[0]) if periods > 1 else 0.0
+    channel = next((r.id for r in records if isinstance(r, Channel)
+                    and r.topic == "/joint_state"), -1)  # fmt: skip
+    total = 0 if statistics is None else statistics.channel_message_counts.get(channel, 0)
+    if statistics is None or total <= periods:
+        return (f"recovered {seconds:.1f} s ({periods} periods): the file ends at byte {size}"
+                " without its summary (an unfinished or cut recording; how much is missing is "
+                "unknown)")  # fmt: skip
+    span = (statistics.message_end_time - statistics.message_start_time) * 1e-9
+    return (f"recovered {seconds:.1f} s of {span:.1f} s ({periods} of {total} periods): the "
+            f"file is damaged from byte {readable} of {size}")  # fmt: skip
 
 
 def _assemble(records: list[Any], complete: bool) -> Recording:
@@ -311,11 +369,16 @@ def _assemble(records: list[Any], complete: bool) -> Recording:
             elif topic == "/event":
                 event = json.loads(record.data)
                 events.append(SessionEvent(float(event["t"]), event["kind"], event["detail"]))
-    arrays = {name: _frozen([s[name] for s in states], (len(states), robot.n_joints))
-              for name in ARRAYS}  # fmt: skip
+    q, qd, tau, tau_ext_hat, tau_ext_std = (
+        _frozen([s[name] for s in states], (len(states), robot.n_joints)) for name in ARRAYS
+    )
     return Recording(
         t=_frozen([s["t"] for s in states], (len(states),)),
-        **arrays,
+        q=q,
+        qd=qd,
+        tau=tau,
+        tau_ext_hat=tau_ext_hat,
+        tau_ext_std=tau_ext_std,
         mode=[s["mode"] for s in states],
         state=[s["state"] for s in states],
         events=events,
@@ -324,7 +387,18 @@ def _assemble(records: list[Any], complete: bool) -> Recording:
         version=metadata["version"],
         start_time=metadata["start_time"],
         complete=complete,
+        tool_wrench=_frozen([s.get("tool_wrench", [None] * 6) for s in states], (len(states), 6)),
+        tool_wrench_covariance=_frozen(
+            [s.get("tool_wrench_covariance", [None] * 36) for s in states], (len(states), 6, 6)
+        ),
     )
+
+
+def _finite_or_null(array: FloatArray) -> list[float | None]:
+    """The numbers of ``array`` as JSON: a non-finite one is ``null``."""
+    if np.isfinite(array).all():
+        return array.tolist()  # type: ignore[no-any-return]
+    return [x if np.isfinite(x) else None for x in array.tolist()]
 
 
 def _frozen(rows: list[Any], shape: tuple[int, ...]) -> FloatArray:

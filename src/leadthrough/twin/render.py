@@ -38,12 +38,16 @@ def render_arm(
     data: mujoco.MjData,
     width: int = 640,
     height: int = 480,
-    distance: float = 1.4,
+    distance: float | None = None,
     azimuth: float = 150.0,
     elevation: float = -20.0,
-    lookat: tuple[float, float, float] = (0.2, 0.1, 0.1),
+    lookat: tuple[float, float, float] | None = None,
 ) -> np.ndarray:
-    """An RGB image (height, width, 3) of the arm in its current state."""
+    """An RGB image (height, width, 3) of the arm in its current state.
+
+    Without ``lookat`` and ``distance`` [m] the camera frames the arm's geometry in its
+    current pose (:func:`_scene_box`): any arm, whatever its reach.
+    """
     prefer_offscreen_gl()
     import mujoco
 
@@ -57,13 +61,38 @@ def render_arm(
             "before MuJoCo is imported"
         ) from None
     camera = mujoco.MjvCamera()
-    camera.distance, camera.azimuth, camera.elevation = distance, azimuth, elevation
-    camera.lookat[:] = lookat
+    camera.azimuth, camera.elevation = azimuth, elevation
+    centre, radius = _scene_box(model, data)
+    fovy = np.radians(model.vis.global_.fovy)
+    camera.lookat[:] = centre if lookat is None else lookat
+    camera.distance = FRAME_MARGIN * radius / np.sin(fovy / 2) if distance is None else distance
     try:
         renderer.update_scene(data, camera)
         return renderer.render().copy()
     finally:
         renderer.close()
+
+
+#: Distance of the camera over the one at which the arm's bounding box half-side fills
+#: half the view (the box's corners may need more: a little margin).
+FRAME_MARGIN = 1.25
+
+
+def _scene_box(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[np.ndarray, float]:
+    """Centre [m] and half the largest side [m] of a box around the arm's geoms.
+
+    The arm: every geom on a moving body, and the world's geoms no larger than the
+    largest of those (the base marker; not a table or a floor).
+    """
+    moving = model.geom_bodyid > 0
+    if not np.any(moving):
+        return np.zeros(3), 1.0
+    small = model.geom_rbound <= model.geom_rbound[moving].max()
+    arm = moving | (small & (model.geom_type != 0))  # type 0: a plane, infinite
+    reach = model.geom_rbound[arm][:, None]
+    points = data.geom_xpos[arm]
+    low, high = (points - reach).min(axis=0), (points + reach).max(axis=0)
+    return 0.5 * (low + high), max(0.5 * float(np.max(high - low)), 0.05)
 
 
 def save_png(image: np.ndarray, path: str | Path) -> Path:

@@ -6,11 +6,13 @@ from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from leadthrough.model.description import FloatArray
 from leadthrough.progress import Progress
-from leadthrough.runtime.interface import Controller, JointState
-from leadthrough.twin.simulator import DigitalTwin
+from leadthrough.runtime.interface import Controller, JointState, RobotInterface
+from leadthrough.runtime.loop import control_loop
+from leadthrough.twin.simulator import DigitalTwin, Truth
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -80,28 +82,50 @@ def simulate(
 ) -> SimulationResult:
     """Run ``controller`` against ``twin`` for ``duration`` seconds of simulated time.
 
-    Each period: read the state, ask the controller, send the command; the twin
-    simulates the period. ``progress`` shows a bar (default: when stderr is a terminal
-    and the run is longer than 10 s).
+    Through :func:`~leadthrough.runtime.loop.control_loop`, the loop that runs on hardware,
+    with the twin as a driver without a wall clock: each period the controller gets the
+    twin's sample (its clock included), its command is sent, the twin simulates the
+    period; compute time is measured but not held against the period. An error brings
+    the controller's safe stop and is raised again. ``progress`` shows a bar (default:
+    when stderr is a terminal and the run is longer than 10 s).
     """
-    periods = round(duration / twin.dt)
     log: dict[str, list] = {field.name: [] for field in fields(SimulationResult)}
     bar = Progress(duration, "simulating", enabled=progress if progress is not None else None)
     bar.enabled = bar.enabled and (progress is True or duration > 10.0)
-    for k in range(periods):
-        state = twin.read_state()
-        command = controller.step(state.q, state.qd, state.tau_measured)
-        _record(log, state, command, twin)
-        twin.send_torque(command)
-        bar.update(k * twin.dt)
-    bar.close()
+    observed = _Observed(twin)
+    start = twin.time
+
+    def record(state: JointState, command: FloatArray) -> None:
+        _record(log, state, command, observed.truth)
+        bar.update(state.t - start)
+
+    try:
+        control_loop(observed, controller, duration, after_period=record, wall_clock=False)
+    finally:
+        bar.close()
     return SimulationResult(**{name: np.array(values) for name, values in log.items()})
 
 
-def _record(
-    log: dict[str, list], state: JointState, command: FloatArray, twin: DigitalTwin
-) -> None:
-    truth = twin.truth
+class _Observed(RobotInterface):
+    """The twin as a driver, keeping the ground truth of the latest sample read."""
+
+    def __init__(self, twin: DigitalTwin) -> None:
+        self.twin, self.dt, self.n_joints = twin, twin.dt, twin.n_joints
+        self.truth = twin.truth
+
+    def read_state(self) -> JointState:
+        state = self.twin.read_state()
+        self.truth = self.twin.truth
+        return state
+
+    def send_torque(self, tau: ArrayLike) -> None:
+        self.twin.send_torque(tau)
+
+    def close(self) -> None:
+        self.twin.close()
+
+
+def _record(log: dict[str, list], state: JointState, command: FloatArray, truth: Truth) -> None:
     log["t"].append(state.t)
     log["q"].append(state.q)
     log["qd"].append(state.qd)

@@ -84,9 +84,10 @@ def _joint(robot: RobotDescription, config: TwinConfig) -> Scenario:
 
 
 def _torque_steps(robot: RobotDescription, config: TwinConfig) -> Scenario:
-    profile = TorqueProfile(3, (step(0.5, 1.0), step(1.5, -2.0)))
-    return Scenario("torque_steps", "scripted torque steps on joint 4", config, profile,
-                    robot.home(), 2.5)  # fmt: skip
+    joint = min(3, robot.n_joints - 1)  # the YuMi's elbow-like joint 4, or an arm's last
+    profile = TorqueProfile(joint, (step(0.5, 1.0), step(1.5, -2.0)))
+    return Scenario("torque_steps", f"scripted torque steps on joint {joint + 1}", config,
+                    profile, robot.home(), 2.5)  # fmt: skip
 
 
 def _table_push(robot: RobotDescription, config: TwinConfig) -> Scenario:

@@ -104,11 +104,13 @@ class TeachingSession:
     def actions(self, robot: RobotDescription) -> list[Action]:
         """Guide, pause, circle, press on the table (~20 N), end-stop, guide, rest."""
         down = -(self.table_gap + self.press_depth)
+        last = robot.n_joints - 1  # the wrist's last joint (joint 7 of the YuMi)
+        end_stop = f"turn joint {last + 1} into its end-stop"
         return [
             Action(1.0, 5.0, _line((0.0, 0.15, 0.02), 3.0), "pull the tool 15 cm"),
             Action(8.0, 15.0, _circle(0.06, 6.0), "draw a circle"),
             Action(18.0, 23.0, _line((0.0, 0.0, down), 2.0), "press the tool on the table"),
-            Action(26.0, 30.0, _to_end_stop(6, robot), "turn joint 7 into its end-stop"),
+            Action(26.0, 30.0, _to_end_stop(last, robot), end_stop),
             Action(36.0, 41.0, _line((-0.05, -0.1, 0.08), 3.0), "lift the tool back"),
         ]
 

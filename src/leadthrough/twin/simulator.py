@@ -226,7 +226,8 @@ class DigitalTwin(RobotInterface):
         self._pending = deque([holding] * max(self.config.delay_periods, 1))
         self._tau_motor = holding.copy()
         self.time = 0.0
-        self.truth = self._sample_truth(np.zeros(self.n_joints), np.zeros(6), np.zeros(7))
+        rest = np.zeros(self.n_joints)
+        self.truth = self._sample_truth(rest, np.zeros(6), rest)
 
     def read_state(self) -> JointState:
         """Encoder angles, noisy velocities and the measured motor torque, now."""

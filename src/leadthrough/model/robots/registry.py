@@ -85,11 +85,11 @@ def yumi() -> RobotDescription:
 def panda() -> RobotDescription:
     """The Franka Emika Panda: franka_description URDF (Apache-2.0) plus its drive data.
 
-    Drive data (``data/panda_drive.toml``, each number with its source): friction of
-    Gaz et al. (RA-L 2019, Table I) mapped onto the sigmoid model, reflected rotor
-    inertias of MuJoCo Menagerie's Panda, the usual ready pose; the gear ratio is
-    assumed (warned). For identified inertials load another URDF with
-    ``from_urdf(path, drive_data=...)``.
+    Drive data (``data/panda_drive.toml``, each number with its source): the linear
+    friction of Gaz et al. (RA-L 2019, Table III) as Coulomb level and viscous
+    coefficient, reflected rotor inertias of MuJoCo Menagerie's Panda, Franka's ready
+    pose; the gear ratio and the sigmoid shape are assumed (warned). For identified
+    inertials load another URDF with ``from_urdf(path, drive_data=...)``.
     """
     return REGISTERED["panda"].load()
 

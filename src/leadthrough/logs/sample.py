@@ -1,0 +1,61 @@
+"""One sample of a robot's joint sensors, with the robot's own time stamp (SPEC §10).
+
+The one time base of a control period: every component of a controller takes the
+time of the period from the sample (``state.t``), whatever its origin (zero at
+start-up, or a Unix clock of 1.7e9 s).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from leadthrough.errors import ParameterError
+from leadthrough.validation import FloatArray
+
+
+@dataclass(frozen=True, eq=False)
+class JointState:
+    """One sample of the joint sensors.
+
+    Attributes:
+        t: Time of the sample on the robot's clock [s] (any origin).
+        q: Joint readings (encoders, quantised) [rad], shape (n,).
+        qd: Joint velocities as the robot reports them (noisy) [rad/s], shape (n,).
+        tau_measured: Motor torque actually applied, as measured, arm side [Nm], shape (n,),
+            or None for a robot that measures none.
+    """
+
+    t: float
+    q: FloatArray
+    qd: FloatArray
+    tau_measured: FloatArray | None
+
+
+def joint_state(
+    state: JointState | ArrayLike,
+    qd: ArrayLike | None,
+    tau_measured: ArrayLike | None,
+    t: float,
+) -> JointState:
+    """The sample of a controller's ``step(state)`` or ``step(q, qd, tau_measured)``.
+
+    Args:
+        state: The robot's sample; or the joint readings q [rad] (positional form).
+        qd: Positional form only: joint velocities [rad/s].
+        tau_measured: Positional form only: measured motor torque [Nm], or None.
+        t: Time stamp of a positional sample [s] (the controller's own clock).
+
+    Raises:
+        ParameterError: A JointState with more arguments, or q without qd.
+    """
+    if isinstance(state, JointState):
+        if qd is not None or tau_measured is not None:
+            raise ParameterError("step", "give a JointState alone, or q, qd, tau_measured")
+        return state
+    if qd is None:
+        raise ParameterError("step", "needs a JointState, or q and qd")
+    tau = None if tau_measured is None else np.asarray(tau_measured, dtype=float)
+    return JointState(t, np.asarray(state, dtype=float), np.asarray(qd, dtype=float), tau)

@@ -1,0 +1,236 @@
+"""Every command-line mistake is one line on stderr and exit status 2, found before any work.
+
+The property test drives every command with generated bad arguments (hypothesis) in-process,
+with the heavy entry points (simulation, identification, report) replaced by a tripwire: a
+mistake that reached them would fail the test instead of running a simulation.
+"""
+
+import io
+import math
+import os
+import signal
+import subprocess
+import sys
+from contextlib import redirect_stderr, redirect_stdout
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import leadthrough as lt
+from leadthrough.cli.main import main
+from leadthrough.runtime.recording import SessionRecorder, read_recording
+
+COMMANDS = ("info", "simulate", "identify", "demo", "teach", "replay", "experiments")
+#: Where each command's heavy work starts (module, attribute).
+HEAVY = [
+    ("leadthrough.twin.session", "run_scenario"),
+    ("leadthrough.cli.identify", "run_friction_study"),
+    ("leadthrough.experiments.demo", "run_demo"),
+    ("leadthrough.experiments.teach", "simulate"),
+    ("leadthrough.experiments.teach", "replay_recording"),
+    ("leadthrough.experiments.report", "write_experiments"),
+]
+
+
+def _tripwire(*args, **kwargs):
+    raise AssertionError("bad arguments reached the heavy work")
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory) -> Path:
+    """A directory with a file, a directory, a short recording and a cut copy of it."""
+    root = tmp_path_factory.mktemp("cli")
+    (root / "afile").write_text("not a directory\n")
+    (root / "adir").mkdir()
+    robot = lt.robots.yumi()
+    with SessionRecorder(root / "taught.mcap", robot, {"dt": 0.004}, flush_period=0.02) as rec:
+        for k in range(100):
+            q = robot.home() + 0.001 * k
+            rec.record(0.004 * k, q, 0 * q, 0 * q, 0 * q, 0 * q, "active", "teaching")
+    data = (root / "taught.mcap").read_bytes()
+    (root / "cut.mcap").write_bytes(data[: len(data) // 2])
+    return root
+
+
+def run(argv: list[str], cwd: Path) -> tuple[int, str, str]:
+    """``main(argv)`` in ``cwd`` with the heavy work tripwired: (status, stdout, stderr)."""
+    out, err = io.StringIO(), io.StringIO()
+    with pytest.MonkeyPatch.context() as patch:
+        patch.chdir(cwd)
+        for module, name in HEAVY:
+            patch.setattr(f"{module}.{name}", _tripwire)
+        with redirect_stdout(out), redirect_stderr(err):
+            status = main(argv)
+    return status, out.getvalue(), err.getvalue()
+
+
+def assert_one_line_error(status: int, err: str) -> None:
+    """Exit status 2 and exactly one non-empty line on stderr, no traceback."""
+    assert status == 2, err
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].strip(), err
+    assert "Traceback" not in err and "error" in lines[0]
+
+
+def _is_float_in(text: str, low: float, high: float, open_low: bool = False) -> bool:
+    try:
+        value = float(text)
+    except ValueError:
+        return False
+    return math.isfinite(value) and low <= value <= high and not (open_low and value == low)
+
+
+def _is_seed(text: str) -> bool:
+    try:
+        return 0 <= int(text) < 2**32
+    except ValueError:
+        return False
+
+
+def _is_joint_list(text: str) -> bool:
+    try:
+        joints = [int(item) for item in text.split(",") if item.strip()]
+    except ValueError:
+        return False
+    return bool(joints) and all(1 <= j <= 7 for j in joints)
+
+
+def _value(valid) -> st.SearchStrategy[str]:
+    """Text, or the text of a number, for which ``valid`` is false."""
+    numbers = st.floats(allow_nan=True, allow_infinity=True).map(repr)
+    integers = st.integers(-(2**70), 2**70).map(str)
+    return st.one_of(numbers, integers, st.text(max_size=12)).filter(lambda s: not valid(s))
+
+
+DURATION = _value(lambda s: _is_float_in(s, 0.0, 600.0, open_low=True))
+SEED = _value(_is_seed)
+TIME_SCALE = _value(lambda s: _is_float_in(s, 0.05, 20.0))
+NAME = st.text(st.characters(codec="utf-8", exclude_characters="\x00"), max_size=10)
+
+
+@st.composite
+def bad_arguments(draw) -> list[str]:
+    """A command and one bad option (the others left at their defaults)."""
+    command = draw(st.sampled_from(COMMANDS))
+    names = st.sampled_from(["missing.toml", "missing.urdf", "afile", "adir", "cut.mcap"])
+    robot = ["--robot", draw(names | NAME.map(lambda s: f"no_such_{s}"))]
+    out_dir = ["--out", draw(st.sampled_from(["afile", "afile/sub", "taught.mcap"]))]
+    unknown = ["--" + draw(NAME.filter(lambda s: s.strip() and not s.startswith("-")))]
+    seed = ["--seed", draw(SEED)]
+    bad = {
+        "info": [robot, unknown],
+        "simulate": [robot, out_dir, unknown, seed, ["--duration", draw(DURATION)],
+                     ["--scenario", draw(NAME)]],
+        "identify": [robot, out_dir, unknown, seed, ["--joints", draw(NAME.filter(
+                     lambda s: not _is_joint_list(s)))], ["--log", "missing.csv"],
+                     ["--log", "afile"], ["--save-log", "afile/log.csv"],
+                     ["--save-log", "log." + draw(NAME.filter(lambda s: s not in ("csv", "npz")))]],
+        "demo": [robot, out_dir, unknown],
+        "teach": [robot, unknown, seed, ["--duration", draw(DURATION)], ["--path", draw(NAME)],
+                  ["--mode", draw(NAME)], ["--friction", "missing.toml"],
+                  ["--friction", "afile"], ["--out", "taught.mcap"], ["--out", "adir"],
+                  ["--out", "afile/taught.mcap"]],
+        "replay": [["missing.mcap"], ["afile"], ["adir"], ["cut.mcap"],
+                   ["taught.mcap", "--time-scale", draw(TIME_SCALE)],
+                   ["taught.mcap", "--seed", draw(SEED)], ["taught.mcap", "--out", "afile"],
+                   ["taught.mcap", *unknown]],
+        "experiments": [robot, out_dir, unknown],
+    }[command]  # fmt: skip
+    option = draw(st.sampled_from(bad))
+    if draw(st.booleans()) and option[0].startswith("--") and len(option) == 2:
+        option = [f"{option[0]}={option[1]}"]  # the --name=value form
+    return [command, *option]
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(argv=bad_arguments())
+def test_bad_arguments_are_one_line_and_exit_2(workdir, argv):
+    """Generated bad arguments of every command: status 2, one stderr line, nothing run."""
+    status, _, err = run(argv, workdir)
+    assert_one_line_error(status, err)
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["teach", "--duration", "-3"],
+        ["teach", "--duration", "nan"],
+        ["simulate", "--duration", "0"],
+        ["simulate", "--duration", "-1"],
+        ["simulate", "--seed", "-5"],
+        ["replay", "taught.mcap", "--time-scale", "1e6"],
+        *[[command, "--out", "afile"] for command in ("simulate", "identify", "demo")],
+        ["experiments", "--out", "afile"],
+        ["replay", "taught.mcap", "--out", "afile"],
+        ["teach", "--out", "taught.mcap"],
+    ],
+    ids=" ".join,
+)
+def test_the_reported_mistakes_are_one_line(workdir, argv):
+    """The mistakes of issue 16, each one line and exit 2 before any work."""
+    assert_one_line_error(*run(argv, workdir)[::2])
+
+
+def test_an_existing_recording_needs_force(workdir):
+    """`teach --out` naming a recording refuses without --force, names --force; with it, runs."""
+    status, _, err = run(["teach", "--out", "taught.mcap"], workdir)
+    assert status == 2 and "--force" in err
+    with pytest.raises(AssertionError, match="heavy work"):  # got past the checks
+        run(["teach", "--out", "taught.mcap", "--force", "--duration", "1"], workdir)
+
+
+def test_partial_recording_is_replayed_only_when_asked(workdir):
+    """A cut recording: one line saying how much was recovered, and that --partial replays it."""
+    status, _, err = run(["replay", "cut.mcap"], workdir)
+    assert_one_line_error(status, err)
+    recovered = read_recording(workdir / "cut.mcap")
+    assert f"recovered {recovered.t[-1]:.1f} s ({len(recovered.t)} periods)" in err
+    assert "--partial" in err
+    with pytest.raises(AssertionError, match="heavy work"):
+        run(["replay", "cut.mcap", "--partial"], workdir)
+
+
+def test_help_exits_0(workdir):
+    """--help of every command prints usage and returns 0."""
+    for command in COMMANDS:
+        status, out, _ = run([command, "--help"], workdir)
+        assert status == 0 and "usage:" in out
+
+
+def test_ctrl_c_during_teach_is_one_line_and_the_recording_is_complete(tmp_path, capsys):
+    """SIGINT while teaching: status 130, one line naming the recording, which reads complete."""
+    from leadthrough.experiments import teach
+
+    friction = tmp_path / "friction.toml"
+    lt.FrictionModel.from_robot(lt.robots.yumi()).save(friction)
+    step = teach.RecordingController.step
+
+    def interrupted_step(self, state):
+        if self.recorded == 50:
+            signal.raise_signal(signal.SIGINT)  # as Ctrl-C: the handler runs in this thread
+        return step(self, state)
+
+    out = tmp_path / "taught.mcap"
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(teach.RecordingController, "step", interrupted_step)
+        status = main(["teach", "--friction", str(friction), "--duration", "5", "--out",
+                       str(out)])  # fmt: skip
+    err = capsys.readouterr().err
+    assert status == 130
+    assert len(err.splitlines()) == 1 and "interrupted" in err and str(out) in err
+    recording = read_recording(out)
+    assert recording.complete and len(recording.t) in (50, 51)
+    assert recording.events[-1].kind == "interrupted"
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # restored
+
+
+def test_closed_stdout_ends_quietly():
+    """`leadthrough info | head`: the reader gone, the command ends with 0 and no message."""
+    process = subprocess.Popen([sys.executable, "-m", "leadthrough.cli", "info"],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               env=os.environ | {"PYTHONUNBUFFERED": "1"})  # fmt: skip
+    process.stdout.close()  # before the child writes: its first write meets a closed pipe
+    err = process.stderr.read().decode()
+    assert process.wait(timeout=60) == 0 and err == ""

@@ -1,0 +1,103 @@
+"""Nothing partial or defaulted in silence: recovered recordings, bounded work, friction warning."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import leadthrough as lt
+from leadthrough.errors import ParameterError, RecordingError
+from leadthrough.experiments import teach
+from leadthrough.runtime.recording import SessionRecorder, read_recording
+
+DT = 0.004  # control period [s]
+PERIODS = 1000  # 4 s
+
+
+@pytest.fixture(scope="module")
+def recording(tmp_path_factory) -> Path:
+    """A finished 4 s synthetic session, flushed every 0.1 s (about 40 chunks)."""
+    robot = lt.robots.yumi()
+    path = tmp_path_factory.mktemp("partial") / "session.mcap"
+    with SessionRecorder(path, robot, {"dt": DT}) as recorder:
+        for k in range(PERIODS):
+            q = robot.home() + 0.1 * np.sin(k * DT)
+            recorder.record(k * DT, q, 0 * q, 0 * q, 0 * q, 0 * q, "active", "teaching")
+    return path
+
+
+def test_damaged_recording_says_how_much_of_how_much(recording, tmp_path):
+    """Zeroed bytes at 40 %: the prefix is read; the message gives read of total (summary)."""
+    data = bytearray(recording.read_bytes())
+    start = int(0.4 * len(data))
+    data[start : start + 200] = bytes(200)
+    damaged = tmp_path / "damaged.mcap"
+    damaged.write_bytes(bytes(data))
+    recovered = read_recording(damaged)
+    periods = len(recovered.t)
+    assert not recovered.complete and 0 < periods < PERIODS
+    seconds = recovered.t[-1] - recovered.t[0]
+    total = (PERIODS - 1) * DT  # the summary's span of message times
+    assert f"recovered {seconds:.1f} s of {total:.1f} s ({periods} of {PERIODS} periods)" in (
+        recovered.recovery
+    )
+    byte = int(recovered.recovery.split("from byte ")[1].split()[0])
+    assert byte <= start, "reading stops before the damage"
+
+
+def test_cut_recording_says_its_length_is_unknown(recording, tmp_path):
+    """A file cut in half has no summary: what was read, where it ends, total unknown."""
+    data = recording.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) // 2])
+    recovered = read_recording(cut)
+    assert not recovered.complete
+    assert f"({len(recovered.t)} periods): the file ends at byte {len(data) // 2}" in (
+        recovered.recovery
+    )
+    assert "unknown" in recovered.recovery
+    assert read_recording(recording).recovery == ""
+
+
+def test_replay_of_a_partial_recording_must_be_asked_for(recording, tmp_path):
+    """replay_on_twin refuses a recovered recording without partial=True, naming --partial."""
+    data = recording.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) // 2])
+    with pytest.raises(RecordingError, match=r"recovered .*--partial"):
+        teach.replay_on_twin(cut, tmp_path / "out")
+
+
+@pytest.mark.parametrize("time_scale", [0.0, 0.01, 25.0, 1e6, float("nan")])
+def test_replay_time_scale_is_bounded(recording, tmp_path, time_scale):
+    """A time scale outside 0.05-20 is a ParameterError before the recording is even read."""
+    with pytest.raises(ParameterError, match="time_scale"):
+        teach.replay_on_twin(tmp_path / "absent.mcap", tmp_path, time_scale)
+
+
+def test_replay_duration_is_bounded(recording, tmp_path, monkeypatch):
+    """A replay longer than MAX_SECONDS of simulation is refused, naming the limit."""
+    monkeypatch.setattr(teach, "MAX_SECONDS", 10.0)  # the 4 s recording at 3× is 12 s
+    with pytest.raises(ParameterError, match="at most 10 s"):
+        teach.replay_on_twin(recording, tmp_path, time_scale=3.0)
+
+
+@pytest.mark.parametrize("duration", [0.0, -1.0, float("inf"), 601.0])
+def test_teaching_duration_is_bounded(tmp_path, duration):
+    """teach_on_twin refuses a duration outside (0, 600] s before any simulation."""
+    with pytest.raises(ParameterError, match="duration"):
+        teach.teach_on_twin(lt.robots.yumi(), tmp_path / "t.mcap", duration=duration)
+
+
+def test_teaching_without_identified_friction_warns(tmp_path, monkeypatch):
+    """No friction file: an UnidentifiedFrictionWarning naming `leadthrough identify`."""
+
+    def stop(*args, **kwargs):
+        raise RuntimeError("stop before simulating")
+
+    monkeypatch.setattr(teach, "simulate", stop)
+    with (
+        pytest.warns(teach.UnidentifiedFrictionWarning, match="leadthrough identify"),
+        pytest.raises(RuntimeError, match="stop before"),
+    ):
+        teach.teach_on_twin(lt.robots.yumi(), tmp_path / "t.mcap")

@@ -1,0 +1,283 @@
+"""One clock, one loop, one model per period (issue 12): what a hardware integrator relies on."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import leadthrough as lt
+from leadthrough.control.constraints import Plane, constraint_torque
+from leadthrough.control.dither import DitherParameters
+from leadthrough.control.parameters import LeadThroughParameters
+from leadthrough.errors import ParameterError
+from leadthrough.friction.model import FrictionModel
+from leadthrough.runtime.interface import JointState, RobotInterface
+from leadthrough.runtime.recording import read_recording
+from leadthrough.runtime.teaching import teach
+from leadthrough.safety.limits import SafetyParameters
+from leadthrough.safety.supervisor import SupervisorState
+from leadthrough.twin.operator import During, Hand
+from leadthrough.twin.paths import Line
+from leadthrough.twin.runner import simulate
+from leadthrough.twin.simulator import DigitalTwin, TwinConfig
+
+ROBOT = lt.robots.yumi()
+N = ROBOT.n_joints
+UNIX_TIME = 1.7e9  # [s]
+
+
+class ShiftedClock(RobotInterface):
+    """The twin behind a driver whose clock starts at ``offset`` [s]; it keeps what it sent."""
+
+    def __init__(self, twin: DigitalTwin, offset: float) -> None:
+        self.twin, self.offset = twin, offset
+        self.dt, self.n_joints = twin.dt, twin.n_joints
+        self.sent: list[np.ndarray] = []
+        self.closed = False
+
+    def read_state(self) -> JointState:
+        """The twin's sample, stamped on this driver's clock."""
+        state = self.twin.read_state()
+        return JointState(state.t + self.offset, state.q, state.qd, state.tau_measured)
+
+    def send_torque(self, tau) -> None:
+        """Send and remember."""
+        self.sent.append(np.array(tau, dtype=float))
+        self.twin.send_torque(tau)
+
+    def close(self) -> None:
+        """Remember the close."""
+        self.closed = True
+
+
+def pulled_twin() -> DigitalTwin:
+    """The YuMi pulled 20 cm sideways in 1 s by a hand that does not let go."""
+    start = lt.Dynamics(ROBOT).pose(ROBOT.home())[:3, 3]
+    hand = Hand(Line(start, start + np.array([0.0, 0.2, 0.0]), duration=1.0))
+    return DigitalTwin(ROBOT, operator=During(hand, 0.0, 10.0))
+
+
+def interrupted_run(offset: float) -> tuple[ShiftedClock, lt.LeadThrough, lt.LoopReport]:
+    """Passive guiding, Ctrl-C at 0.6 s while the arm moves; the driver's clock at ``offset``."""
+    robot, controller = ShiftedClock(pulled_twin(), offset), lt.LeadThrough(ROBOT, "passive")
+
+    def ctrl_c(state: JointState, command: np.ndarray) -> None:
+        if state.t - offset >= 0.6 - 1e-4:  # 1.7e9 s carries 0.2 µs resolution
+            raise KeyboardInterrupt
+
+    report = lt.control_loop(robot, controller, duration=2.0, after_period=ctrl_c, wall_clock=False)
+    return robot, controller, report
+
+
+def test_a_unix_clock_keeps_the_damped_safe_stop():
+    """Ctrl-C on a robot whose clock reads 1.7e9 s: the same damped stop as with t₀ = 0."""
+    runs = {offset: interrupted_run(offset) for offset in (0.0, UNIX_TIME)}
+    stops = {}
+    for offset, (robot, controller, report) in runs.items():
+        assert report.ended == "interrupted by the operator (Ctrl-C)" and robot.closed
+        assert controller.state is SupervisorState.FAULT
+        (fault,) = [e for e in controller.supervisor.events if e.kind == "fault"]
+        assert fault.t == pytest.approx(offset + 0.6, abs=1e-6)  # on the robot's clock
+        stops[offset] = np.array(robot.sent[report.periods :])
+    np.testing.assert_allclose(stops[UNIX_TIME], stops[0.0], atol=1e-9)
+    hold = lt.Dynamics(ROBOT).gravity(runs[UNIX_TIME][1].supervisor._q_last_good)
+    assert np.max(np.abs(stops[UNIX_TIME][0] - hold)) > 0.05  # damping, not G alone
+
+
+def test_the_controller_takes_time_from_the_sample():
+    """step(state) stamps events and its clock with state.t; the positional form counts dt."""
+    controller = lt.LeadThrough(ROBOT, "passive")
+    q = ROBOT.home()
+    for k in range(3):
+        controller.step(JointState(UNIX_TIME + 0.004 * k, q, np.zeros(N), None))
+    assert controller.time == UNIX_TIME + 0.008
+    positional = lt.LeadThrough(ROBOT, "passive")
+    for _ in range(3):
+        positional.step(q, np.zeros(N))
+    assert positional.time == pytest.approx(0.012)
+    with pytest.raises(ParameterError, match="JointState alone"):
+        controller.step(JointState(0.0, q, np.zeros(N), None), np.zeros(N))
+
+
+def test_an_exception_inside_the_step_is_named_and_the_arm_stopped_that_period(monkeypatch):
+    """An IndexError in the observer: fault naming it and where, safe stop returned at once."""
+    controller = lt.LeadThrough(ROBOT, "active")
+    q = ROBOT.home()
+    controller.step(q, np.zeros(N))
+
+    def broken(self, qd, q=None):
+        raise IndexError("index 9 is out of bounds for axis 0 with size 7")
+
+    monkeypatch.setattr(FrictionModel, "mean_and_std", broken)
+    qd = np.full(N, 0.05)
+    command = controller.step(q, qd)
+    reason = controller.supervisor.fault_reason
+    assert controller.state is SupervisorState.FAULT
+    assert reason.startswith("observer failed: IndexError: index 9 is out of bounds")
+    assert "estimation/observer.py" in reason
+    gravity, damping = lt.Dynamics(ROBOT).gravity(q), lt.Dynamics(ROBOT).mass(q).diagonal() / 0.05
+    np.testing.assert_allclose(command, np.clip(gravity - damping * qd, -ROBOT.torque_limits,
+                                                ROBOT.torque_limits), atol=1e-9)  # fmt: skip
+
+
+def test_a_controller_at_another_period_than_the_robot_is_refused():
+    """A 4 ms controller on a 1 ms robot: one-line error before anything is sent."""
+    twin = DigitalTwin(ROBOT, TwinConfig(control_dt=0.001))
+    with pytest.raises(
+        ParameterError, match=r"controller runs at 4 ms, the robot at 1 ms"
+    ) as error:
+        lt.control_loop(twin, lt.LeadThrough(ROBOT, "passive", dt=0.004), duration=0.1)
+    assert "\n" not in str(error.value)
+    assert twin.time == 0.0
+
+
+@pytest.mark.parametrize("delay", [1, 2, 3])
+def test_one_delay_line_for_the_command_and_its_dither(monkeypatch, delay):
+    """Without a torque reading the observer gets the command of k − delay minus its dither."""
+    parameters = LeadThroughParameters(measurement_delay=delay)
+    controller = lt.LeadThrough(ROBOT, "passive", parameters=parameters)
+    seen, update = [], controller.observer.update
+
+    def spying(q, qd, tau, model=None):
+        seen.append(tau)
+        return update(q, qd, tau, model)
+
+    monkeypatch.setattr(controller.observer, "update", spying)
+    q, commands, dithers = ROBOT.home(), [], []
+    rng = np.random.default_rng(0)
+    for _ in range(30):  # velocity noise at rest: the encoders are alive, the dither on
+        commands.append(controller.step(q, 1e-4 * rng.standard_normal(N)))
+        dithers.append(controller.last_feed_forward.dither)
+    assert np.count_nonzero(np.array(dithers)) > 0
+    for k in range(delay, 30):
+        np.testing.assert_array_equal(seen[k], commands[k - delay] - dithers[k - delay])
+    np.testing.assert_array_equal(seen[delay - 1], 0.0)
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"measurement_delay": 0}, "measurement_delay"),
+        ({"measurement_delay": 1.5}, "measurement_delay"),
+        ({"rest_velocity": 0.0}, "rest_velocity"),
+        ({"assist_speed_fraction": 1.5}, "assist_speed_fraction"),
+        ({"dither": DitherParameters(moving_velocity=0.02)}, "rest_velocity"),
+    ],
+)
+def test_invalid_parameters_are_refused_at_construction(changes, message):
+    """Integer delays from 1, one definition of at rest: one line naming the parameter."""
+    with pytest.raises(ParameterError, match=message):
+        LeadThroughParameters(**changes)
+
+
+def test_bounds_that_would_invert_are_refused_against_the_robot():
+    """limit_zone = 5 rad leaves nothing of the YuMi's joints: refused, naming the joint."""
+    with pytest.raises(ParameterError, match=r"limit_zone: .* joint \d+'s range"):
+        lt.LeadThrough(ROBOT, parameters=LeadThroughParameters(limit_zone=5.0))
+    wide = SafetyParameters(soft_limit_margin=3.5)
+    with pytest.raises(ParameterError, match="soft_limit_margin"):
+        lt.LeadThrough(ROBOT, parameters=LeadThroughParameters(safety=wide))
+    with pytest.raises(ParameterError, match="calibrate"):
+        lt.LeadThrough(ROBOT, parameters=LeadThroughParameters(calibration=None), calibrate=True)
+    with pytest.raises(ParameterError, match="constraints"):
+        lt.LeadThrough(ROBOT, constraints=["a plane"])
+
+
+def test_the_calibration_only_runs_when_asked_for():
+    """LeadThrough(robot) guides at once; calibrate=True moves the arm first, for its duration."""
+    quiet, moving = lt.LeadThrough(ROBOT), lt.LeadThrough(ROBOT, calibrate=True)
+    assert not quiet.calibrating and quiet.calibration_time == 0.0
+    assert moving.calibrating and moving.calibration_time > 0.5
+
+
+def test_a_payload_changes_the_one_model_everywhere():
+    """After set_payload the supervisor, observer and feed-forward share the loaded model."""
+    controller = lt.LeadThrough(ROBOT, "passive")
+    controller.set_payload(1.0, (0.0, 0.0, 0.05))
+    dynamics = controller.dynamics
+    assert (
+        controller.supervisor.dynamics is dynamics and controller.supervisor.robot is dynamics.robot
+    )
+    assert controller.observer.dynamics is dynamics and controller.feed_forward.dynamics is dynamics
+    assert dynamics.robot.total_mass == pytest.approx(ROBOT.total_mass + 1.0)
+
+
+def test_constraints_act_at_the_tool_centre_point():
+    """A 15 cm tool: the plane pulls the tip, not the flange, back (Jᵀ F at the TCP)."""
+    tool = lt.Dynamics(dataclasses.replace(ROBOT, tcp=lt.Placement([0.0, 0.0, 0.15])))
+    q = ROBOT.home()
+    tip = tool.tool_pose(q)[:3, 3]
+    plane = Plane(point=tip + np.array([0.01, 0.0, 0.0]), normal=(1.0, 0.0, 0.0))  # tip 1 cm behind
+    torque, force = constraint_torque([plane], tool, q, np.zeros(N))
+    np.testing.assert_allclose(force, [3000.0 * 0.01, 0.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(torque, tool.tool_jacobian(q)[:3].T @ force, atol=1e-12)
+    assert np.max(np.abs(torque - tool.jacobian(q)[:3].T @ force)) > 0.1
+
+
+def test_every_component_gets_the_same_snapshot(monkeypatch):
+    """M(q), G(q) and the Jacobian are computed once per period (one snapshot)."""
+    controller = lt.LeadThrough(ROBOT, "active")
+    dynamics = controller.dynamics
+    calls = {"snapshot": 0, "mass": 0, "gravity": 0, "jacobian": 0}
+    for name in calls:
+        original = getattr(dynamics, name)
+
+        def counted(*args, _name=name, _original=original, **kwargs):
+            calls[_name] += 1
+            return _original(*args, **kwargs)
+
+        monkeypatch.setattr(dynamics, name, counted)
+    q = ROBOT.home()
+    for _ in range(5):
+        controller.step(q, np.full(N, 0.02))
+    assert calls == {"snapshot": 5, "mass": 0, "gravity": 0, "jacobian": 0}
+
+
+class WrenchLog:
+    """Steps a LeadThrough and keeps its tool wrench each period."""
+
+    def __init__(self, controller: lt.LeadThrough) -> None:
+        self.controller, self.dt, self.supervisor = controller, controller.dt, controller.supervisor
+        self.wrenches: list[lt.ToolWrench] = []
+
+    def step(self, state: JointState) -> np.ndarray:
+        """One period, and the wrench read."""
+        command = self.controller.step(state)
+        self.wrenches.append(self.controller.tool_wrench)
+        return command
+
+
+def test_the_tool_wrench_reads_the_hand_of_the_twin():
+    """A hand pulls the tool (≈14 N RMS): F̂ = (Jᵀ)⁺ τ̂_ext within 25 %, inside its 3σ."""
+    start = lt.Dynamics(ROBOT).pose(ROBOT.home())[:3, 3]
+    hand = Hand(Line(start, start + np.array([0.0, 0.2, -0.1]), duration=1.5))
+    log = WrenchLog(lt.LeadThrough(ROBOT, "passive"))
+    sim = simulate(DigitalTwin(ROBOT, operator=During(hand, 0.0, 10.0)), log, 1.5)
+    pulling = sim.t > 0.2  # the observer has settled
+    estimate = np.array([w.vector for w in log.wrenches])[pulling]
+    std = np.array([w.std for w in log.wrenches])[pulling]
+    truth = sim.operator_wrench[pulling]  # at the flange = the TCP here, world axes
+    error = np.linalg.norm(estimate[:, :3] - truth[:, :3], axis=1)
+    size = np.sqrt(np.mean(np.sum(truth[:, :3] ** 2, axis=1)))
+    assert size > 10.0
+    assert np.sqrt(np.mean(error**2)) < 0.25 * size
+    assert np.mean(np.abs(estimate - truth) <= 3.0 * std) > 0.99
+    covariance = log.wrenches[-1].covariance
+    np.testing.assert_allclose(covariance, covariance.T, atol=1e-9)
+    assert np.all(np.linalg.eigvalsh(covariance) > -1e-9)
+
+
+def test_teaching_records_on_any_driver(tmp_path):
+    """teach() on a driver: every period recorded with the tool wrench, events on its clock."""
+    robot = ShiftedClock(pulled_twin(), UNIX_TIME)
+    controller = lt.LeadThrough(ROBOT, "active")
+    report = teach(robot, controller, tmp_path / "taught.mcap", duration=0.4, wall_clock=False)
+    recording = read_recording(tmp_path / "taught.mcap")
+    assert report.recorded == report.loop.periods == len(recording.t) == 100
+    np.testing.assert_allclose(recording.t, np.arange(100) * 0.004, atol=1e-6)
+    assert np.all(np.isfinite(recording.tool_wrench))
+    assert recording.tool_wrench_covariance.shape == (100, 6, 6)
+    assert all(0.0 <= event.t < 0.4 for event in recording.events)
+    assert recording.complete and "recorded 100 periods" in report.summary()
