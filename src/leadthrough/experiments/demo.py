@@ -18,11 +18,13 @@ import numpy as np
 
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.experiments.friction_study import run_friction_study
+from leadthrough.experiments.guiding import tool_vibration
 from leadthrough.experiments.teach import RecordingController, replay_recording
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.runtime.recording import SessionRecorder, read_recording
+from leadthrough.twin.operator import Hand
 from leadthrough.twin.presets import REALISTIC_TWIN
 from leadthrough.twin.runner import SimulationResult, simulate
 from leadthrough.twin.session_operator import Action, ScriptedOperator, TeachingSession
@@ -109,3 +111,26 @@ def run_demo(out: Path, robot: RobotDescription, config: TwinConfig = REALISTIC_
 def tool_path(dynamics: Dynamics, q: FloatArray) -> FloatArray:
     """Flange positions [m] (N, 3) of joint paths (N, n)."""
     return np.array([dynamics.pose(row)[:3, 3] for row in q])
+
+
+def path_smoothness(taught: SimulationResult, actions: list[Action]) -> dict[str, float]:
+    """How smooth the taught tool path is, against the path the operator meant [m/s].
+
+    ``taught``: RMS tool velocity above 4 Hz (:func:`~.guiding.tool_vibration`) over the
+    session; ``intended``: the same figure of the hands' own paths (each action's path
+    rebuilt from where the flange was when it began, zero between actions); ``speed``:
+    the RMS tool speed, for scale.
+    """
+    dt = float(taught.t[1] - taught.t[0])
+    velocity = np.gradient(taught.flange_position, dt, axis=0)
+    intended = np.zeros_like(velocity)
+    for action in actions:
+        during = np.flatnonzero((taught.t >= action.start) & (taught.t < action.stop))
+        if during.size == 0:
+            continue
+        first = during[0]
+        operator = action.make(taught.flange_position[first], taught.q_true[first])
+        if isinstance(operator, Hand):  # a hand on the tool (not one turning a joint)
+            intended[during] = operator.path.velocity(taught.t[during] - action.start)
+    return {"taught": tool_vibration(velocity, dt), "intended": tool_vibration(intended, dt),
+            "speed": float(np.sqrt(np.mean(np.sum(velocity**2, axis=1))))}  # fmt: skip

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from leadthrough.experiments.demo import DemoResult, teaching_actions
+from leadthrough.experiments.demo import DemoResult, path_smoothness, teaching_actions
 from leadthrough.model.description import RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.plots import pyplot
@@ -25,7 +25,7 @@ def write_report(result: DemoResult, robot: RobotDescription, out: Path) -> Path
         plt.close(figure)
     picture = _picture(result, robot, out / "arm.png")
     report = out / "report.md"
-    report.write_text(_markdown(result, picture, robot.name), encoding="utf-8")
+    report.write_text(_markdown(result, picture, robot), encoding="utf-8")
     return report
 
 
@@ -108,8 +108,10 @@ def _picture(result: DemoResult, robot: RobotDescription, path: Path) -> str:
     return f"![the arm mid-teaching]({path.name})"
 
 
-def _markdown(result: DemoResult, picture: str, name: str) -> str:
+def _markdown(result: DemoResult, picture: str, robot: RobotDescription) -> str:
+    name = robot.name
     errors, sim = result.replay_error, result.taught
+    smooth = path_smoothness(sim, teaching_actions(robot))
     events = [e for e in result.events if e[1] not in ("mode",)]
     event_lines = "\n".join(f"| {t:.2f} | {kind} | {detail} |" for t, kind, detail in events[:20])
     seconds = ", ".join(f"{name} {value:.1f} s" for name, value in result.seconds.items())
@@ -139,6 +141,10 @@ Estimation error over the session (all joints, moving samples): RMS
 
 Operator's hand force: RMS {np.sqrt(np.mean(sim.operator_force**2)):.2f} N,
 peak {sim.operator_force.max():.1f} N.
+
+Smoothness of the taught path: tool velocity above 4 Hz, RMS over the session,
+**{1e3 * smooth["taught"]:.1f} mm/s** against {1e3 * smooth["intended"]:.1f} mm/s in the
+paths the operator's hand followed (RMS tool speed {1e3 * smooth["speed"]:.0f} mm/s).
 
 ## Supervisor events
 | t [s] | kind | detail |

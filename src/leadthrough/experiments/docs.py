@@ -191,7 +191,7 @@ def _identify(robot: RobotDescription, seed: int, random_friction: bool) -> Fric
 
 
 def _demo(robot: RobotDescription, out: Path, numbers: dict[str, str]) -> Path:
-    from leadthrough.experiments.demo import run_demo
+    from leadthrough.experiments.demo import path_smoothness, run_demo, teaching_actions
     from leadthrough.experiments.demo_report import write_report
 
     start = time.perf_counter()
@@ -206,6 +206,8 @@ def _demo(robot: RobotDescription, out: Path, numbers: dict[str, str]) -> Path:
         "demo.tool_max_mm": f"{1e3 * errors['tool_max']:.1f}",
         "demo.force_rms_n": _f(float(np.sqrt(np.mean(sim.operator_force**2)))),
     }
+    smooth = path_smoothness(sim, teaching_actions(robot))
+    numbers |= {f"demo.vibration_{key}_mm_s": _f(1e3 * value) for key, value in smooth.items()}
     return out / "friction.toml"
 
 
