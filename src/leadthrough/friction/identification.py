@@ -10,8 +10,12 @@ Per joint, from the logs where that joint moved:
 
 3. sliding samples (|q̇| ≥ ``sliding_velocity``) fix the Coulomb level, its position
    dependence and the viscous coefficient by *linear* least squares,
-   ``τ_f = sign(q̇) τ_C (1 + k₁ u + k₂ u²) + c q̇`` (the position terms only where the runs
-   cover enough of the range);
+   ``τ_f = sign(q̇) τ_C (1 + k₁ u + k₂ u²) + c q̇``. The position terms are fitted only
+   where the runs cover enough of the range, with u spanning the stroke the sliding
+   samples saw (the model holds the end values beyond it, never extrapolating over a
+   ±2π range), and kept only if the level they give stays positive over that stroke:
+   a level that changes sign within the data is the fit absorbing something else
+   (gravity or drive-gain errors), not friction the data support;
 4. the noise σ is the standard deviation of the sliding residual (the thesis' "variance
    of the friction torque at high velocities");
 5. the sigmoid slope A and half-width B are fitted (SciPy ``least_squares``, robust loss)
@@ -30,7 +34,7 @@ import numpy as np
 
 from leadthrough.errors import LeadthroughError
 from leadthrough.filters import low_pass_signal, pole
-from leadthrough.friction.model import FrictionModel, sigmoid
+from leadthrough.friction.model import FrictionModel, level_stays_positive, sigmoid
 from leadthrough.model.description import FloatArray
 from leadthrough.model.dynamics import Dynamics
 
@@ -121,7 +125,9 @@ def identify_friction(
         logs: One log or a list of logs (mappings or objects with arrays ``t`` (N,),
             ``q``, ``qd``, ``tau`` (N, n)); ``tau`` is the measured motor torque, arm side.
         dynamics: Model used to remove gravity and inertia torques.
-        joints: Joints to identify (default: every joint that moved in some log).
+        joints: Joints to identify (default: every joint that moved in some log and
+            slid for at least ``settings.minimum_samples`` samples; a joint that only
+            twitched is left at the prior rather than failing the whole fit).
         settings: Thresholds of the fit.
         prior: Values kept for joints not identified (default: the description's).
 
@@ -146,7 +152,13 @@ def fit_friction(
     """The fit of :func:`identify_friction`, on samples from :func:`friction_samples`."""
     settings = settings or IdentificationSettings()
     moved = np.flatnonzero(samples.moved.any(axis=0))
-    joints = tuple(moved) if joints is None else tuple(joints)
+    if joints is None:
+        joints = tuple(j for j in moved if _sliding_count(samples, j, settings)
+                       >= settings.minimum_samples)  # fmt: skip
+        if not joints:
+            raise IdentificationError(f"no joint slid faster than {settings.sliding_velocity:g}"
+                                      f" rad/s for {settings.minimum_samples} samples")  # fmt: skip
+    joints = tuple(int(j) for j in joints)
     for j in joints:
         if j not in moved:
             raise IdentificationError(f"joint {j + 1} never moved faster than "
@@ -164,6 +176,13 @@ def fit_friction(
     for j in joints:
         _fit_joint(j, samples, dynamics, settings, values, report)
     return FrictionModel(**values), report
+
+
+def _sliding_count(samples: FrictionSamples, j: int, settings: IdentificationSettings) -> int:
+    """Sliding samples of joint ``j`` in the logs where it moved."""
+    return int(
+        np.sum(samples.moved[:, j] & (np.abs(samples.qd[:, j]) >= settings.sliding_velocity))
+    )
 
 
 def friction_samples(
@@ -245,30 +264,40 @@ def _fit_joint(
     if sliding.sum() < settings.minimum_samples:
         raise IdentificationError(f"joint {j + 1}: only {sliding.sum()} samples faster than "
                                   f"{settings.sliding_velocity:g} rad/s")  # fmt: skip
-    mid, half = 0.5 * (robot.q_min[j] + robot.q_max[j]), 0.5 * (robot.q_max[j] - robot.q_min[j])
-    u = (q - mid) / half
-    with_position = np.ptp(q[sliding]) >= settings.position_span * 2.0 * half
-    theta, std, residual = _fit_sliding(qd[sliding], u[sliding], tau[sliding], with_position)
+    mid, half = _position_span(q[sliding], robot.q_min[j], robot.q_max[j], settings)
+    with_position = bool(np.isfinite(half))
+    if with_position:
+        u = (q - mid) / half
+        theta, std, residual = _fit_sliding(qd[sliding], u[sliding], tau[sliding], True)
+        with_position = bool(theta[0] > 3.0 * std[0]) and bool(  # a level the data resolve
+            level_stays_positive(theta[1] / theta[0], theta[2] / theta[0])
+        )
+    if not with_position:
+        mid, half = 0.5 * (robot.q_min[j] + robot.q_max[j]), 0.5 * (robot.q_max[j] - robot.q_min[j])
+        u = (q - mid) / half
+        theta, std, residual = _fit_sliding(qd[sliding], u[sliding], tau[sliding], False)
     coulomb, viscous = theta[0], theta[-1]
     values["coulomb"][j], values["viscous"][j] = coulomb, max(viscous, 0.0)
     values["noise_std"][j] = float(np.std(residual))
     values["position_mid"][j], values["position_half_range"][j] = mid, half
+    values["position_linear"][j] = theta[1] / coulomb if with_position else 0.0
+    values["position_quadratic"][j] = theta[2] / coulomb if with_position else 0.0
     if with_position:
-        values["position_linear"][j] = theta[1] / coulomb
-        values["position_quadratic"][j] = theta[2] / coulomb
         report.parameter_std["position_linear"][j] = std[1] / coulomb
         report.parameter_std["position_quadratic"][j] = std[2] / coulomb
     report.parameter_std["coulomb"][j], report.parameter_std["viscous"][j] = std[0], std[-1]
     # what is left unexplained: 3 std of the level plus the spread of the sliding residual
-    values["relative_error"][j] = np.clip((3.0 * std[0] + 2.0 * np.std(residual)) / coulomb,
+    values["relative_error"][j] = np.clip((3.0 * std[0] + 2.0 * np.std(residual))
+                                          / max(coulomb, 1e-12),
                                           MIN_RELATIVE_ERROR, 0.5)  # fmt: skip
     report.residual_rms[j] = float(np.sqrt(np.mean(residual**2)))
     report.samples[j] = sliding.sum()
     report.position_fitted[j] = with_position
     slow = np.abs(qd) < 2.0 * settings.sliding_velocity
     if slow.sum() >= 20:
-        level = coulomb * (1.0 + values["position_linear"][j] * u[slow]
-                           + values["position_quadratic"][j] * u[slow] ** 2)  # fmt: skip
+        u_slow = np.clip(u[slow], -1.0, 1.0)  # as the model holds its ends
+        level = coulomb * (1.0 + values["position_linear"][j] * u_slow
+                           + values["position_quadratic"][j] * u_slow**2)  # fmt: skip
         start = (values["slope"][j], values["half_width"][j])
         params, std = _fit_sigmoids(qd[slow], level, values["viscous"][j],
                                     values["noise_std"][j], tau[slow], start)  # fmt: skip
@@ -276,16 +305,38 @@ def _fit_joint(
         report.parameter_std["slope"][j], report.parameter_std["half_width"][j] = std
 
 
+def _position_span(
+    q: FloatArray, q_min: float, q_max: float, settings: IdentificationSettings
+) -> tuple[float, float]:
+    """(middle, half) of the stroke ``q`` covers [rad]; half is inf when it covers too little.
+
+    The stroke must cover ``settings.position_span`` of the joint range (of 2π when the
+    range is wider than a turn: a ±2π joint's friction repeats with the motor, not the range).
+    """
+    low, high = float(np.min(q)), float(np.max(q))
+    reference = min(q_max - q_min, 2.0 * np.pi)
+    if high - low < settings.position_span * reference:
+        return 0.5 * (q_min + q_max), float("inf")
+    return 0.5 * (low + high), 0.5 * (high - low)
+
+
 def _fit_sliding(
     qd: FloatArray, u: FloatArray, tau: FloatArray, with_position: bool
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Linear least squares of ``τ = sign(q̇) (a₀ + a₁ u + a₂ u²) + c q̇``: θ, std(θ), residual."""
-    from scipy import linalg  # at call time: keeps `import leadthrough` fast
+    """Least squares of ``τ = sign(q̇) (a₀ + a₁ u + a₂ u²) + c q̇``, a₀, c ≥ 0: θ, std(θ), residual.
+
+    Friction dissipates, so the Coulomb level and the viscous coefficient are bounded
+    below by 0: where the rigid-body model is poor (a nominal URDF), an unconstrained fit
+    would return a negative level, which no friction model can hold.
+    """
+    from scipy import optimize  # at call time: keeps `import leadthrough` fast
 
     sign = np.sign(qd)
     columns = [sign, sign * u, sign * u * u, qd] if with_position else [sign, qd]
     design = np.column_stack(columns)
-    theta = linalg.lstsq(design, tau)[0]
+    lower = np.full(design.shape[1], -np.inf)
+    lower[[0, -1]] = 0.0
+    theta = optimize.lsq_linear(design, tau, bounds=(lower, np.inf)).x
     residual = tau - design @ theta
     dof = max(len(tau) - len(theta), 1)
     covariance = np.linalg.pinv(design.T @ design) * (residual @ residual) / dof
@@ -310,7 +361,7 @@ def _fit_sigmoids(
     Returns:
         (A, B) and their standard deviations.
     """
-    scale = float(np.max(level))
+    scale = max(float(np.max(level)), noise_std, 1e-9)  # a zero level (τ_C bounded at 0)
 
     def residual(log_params: FloatArray) -> FloatArray:
         slope, half_width = np.exp(log_params)
