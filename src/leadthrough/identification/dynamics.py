@@ -8,8 +8,9 @@ tell it. A parameter the runs do not excite keeps its nominal value (ridge towar
 URDF rather than base parameters: the result is a full description that Dynamics and
 the observer use as is); the posterior standard deviation says which were identified.
 
-Signals are smoothed and differentiated at the log's own, irregular time stamps
-(:func:`~leadthrough.identification.smoothing.smooth_derivative`, zero phase). Rows of
+Velocities are smoothed and differentiated at the log's own, irregular time stamps
+(:func:`~leadthrough.identification.smoothing.smooth_derivative`, zero phase); torques
+are used raw. Rows of
 a joint moving slower than ``min_velocity`` are left out (at rest the friction is
 anything within ±τ_C: not a model the regression can use). The noise of each joint is
 its residual RMS, estimated in a first pass and used as its weight in the second.
@@ -160,11 +161,14 @@ def identify_dynamics(
 
 
 def smoothed_signals(log: Any, bandwidth: float) -> tuple[FloatArray, ...]:
-    """(q, q̇, q̈, τ) of a log: q̇ and τ smoothed, q̈ their zero-phase derivative [SI]."""
+    """(q, q̇, q̈, τ) of a log: q̇ smoothed and q̈ its zero-phase derivative [SI].
+
+    τ stays raw: its noise is white and averages out in the regression, while smoothing
+    would smear the Coulomb step at each reversal that the friction model keeps sharp.
+    """
     t = np.asarray(log.t, dtype=float)
     qd, qdd = smooth_derivative(t, log.qd, bandwidth)
-    tau = smooth_derivative(t, log.tau, bandwidth)[0]
-    return np.asarray(log.q, dtype=float), qd, qdd, tau
+    return np.asarray(log.q, dtype=float), qd, qdd, np.asarray(log.tau, dtype=float)
 
 
 def _stacked_samples(logs: Any, n: int, settings: DynamicsSettings) -> tuple[FloatArray, ...]:

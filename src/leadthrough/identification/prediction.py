@@ -45,8 +45,7 @@ def prediction_error(
 ) -> FloatArray:
     """Measured minus predicted torque in the log's torque units [Nm], (N, n)."""
     predicted = predict_torque(log, robot, offset, bandwidth)
-    measured = smooth_derivative(np.asarray(log.t, dtype=float), log.tau, bandwidth)[0]
-    return measured - gain_ratio(log, robot) * predicted
+    return np.asarray(log.tau, dtype=float) - gain_ratio(log, robot) * predicted
 
 
 def gain_ratio(log: Any, robot: RobotDescription) -> FloatArray:
