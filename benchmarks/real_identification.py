@@ -29,7 +29,11 @@ def main() -> None:
     if not (args.realdata / "ur10e").is_dir() or not (args.realdata / "panda_gaz2019").is_dir():
         print(f"real_identification: skipped, no real robot logs at {args.realdata}")
         return
-    from leadthrough.experiments.real_dynamics import dynamics_table, ur10e_dynamics_study
+    from leadthrough.experiments.real_dynamics import (
+        dynamics_table,
+        panda_split_study,
+        ur10e_dynamics_study,
+    )
     from leadthrough.experiments.real_friction import (
         friction_table,
         panda_friction,
@@ -49,6 +53,12 @@ def main() -> None:
     print(dynamics_table(study))
     gains = " ".join(f"{g:.3f}" for g in study.report.gain_scale)
     print(f"\ndrive-gain scale g per joint: {gains}")
+    panda = panda_split_study(args.realdata)
+    print("\nPanda, fitted on the first half of its run, torque RMS on the second half [Nm]:\n")
+    print("| model | " + " | ".join(f"joint {j + 1}" for j in range(7)) + " |")
+    print("|---" * 8 + "|")
+    for model, values in panda.items():
+        print(f"| {model} | " + " | ".join(f"{v:.2f}" for v in values) + " |")
     if args.save:
         numbers = {
             "friction": [{"robot": r.robot, "joint": r.joint + 1, "rms_ours": r.rms_ours,
@@ -58,6 +68,7 @@ def main() -> None:
             "percent": {run: {model: study.percent(run, model) for model in
                               ("nominal", "published", "ours")} for run in study.held_out},
             "gain_scale": study.report.gain_scale.tolist(),
+            "panda_second_half": {model: values.tolist() for model, values in panda.items()},
         }  # fmt: skip
         Path(args.save).write_text(json.dumps(numbers, indent=1), encoding="utf-8")
         print(f"saved {args.save}")

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from leadthrough.experiments.real_friction import _quiet, ur10e_friction
+from leadthrough.experiments.real_friction import quietly, ur10e_friction
 from leadthrough.friction.model import FrictionModel
 from leadthrough.identification.dynamics import DynamicsReport, DynamicsSettings, identify_dynamics
 from leadthrough.identification.prediction import gain_ratio, prediction_error, rms
@@ -80,13 +80,13 @@ def ur10e_dynamics_study(
     from leadthrough.model.robots.registry import ur10e
 
     root = Path(folder) / "ur10e"
-    nominal = _quiet(ur10e)
+    nominal = quietly(ur10e)
     rows = ur10e_friction(folder, nominal)
     prior = _combined_friction(rows)
     paths = sorted(root.glob(FITTED))
-    logs = [_quiet(read_log, path, nominal) for path in paths]
+    logs = [quietly(read_log, path, nominal) for path in paths]
     identified, report = identify_dynamics(logs, nominal, prior, settings=settings)
-    held_out = {name: _quiet(read_log, root / path, nominal) for name, path in HELD_OUT.items()}
+    held_out = {name: quietly(read_log, root / path, nominal) for name, path in HELD_OUT.items()}
     published = published_parameters(root / "description", nominal)
     errors = {name: {"nominal": prediction_error(log, nominal),
                      "published": published_error(log, nominal, published),
@@ -133,3 +133,25 @@ def dynamics_table(study: DynamicsStudy) -> str:
             values = " | ".join(f"{v:.2f}" for v in study.rms(run, model))
             lines.append(f"| {run} | {model} | {values} | {study.percent(run, model):.1f} |")
     return "\n".join(lines)
+
+
+def panda_split_study(folder: str | Path) -> dict[str, FloatArray]:
+    """The Panda's one excitation run: fitted on its first half, judged on its second.
+
+    The halves are not independent runs (one Fourier trajectory, ~21 s), so this checks
+    the fit on a robot with joint torque sensors, not generalisation. Prior: the shipped
+    ``lt.robots.panda()``.
+
+    Returns:
+        Torque prediction RMS per joint [Nm] on the second half: "nominal" and "ours".
+    """
+    from leadthrough.model.robots.registry import panda
+
+    robot = quietly(panda)
+    log = quietly(read_log, Path(folder) / "panda_gaz2019", robot)
+    half = log.n_samples // 2
+    first, second = (JointLog(t=log.t[part], q=log.q[part], qd=log.qd[part], tau=log.tau[part])
+                     for part in (slice(0, half), slice(half, None)))  # fmt: skip
+    identified, report = identify_dynamics(first, robot)
+    return {"nominal": rms(prediction_error(second, robot)),
+            "ours": rms(prediction_error(second, identified, report.offset))}  # fmt: skip

@@ -107,12 +107,12 @@ def ur10e_friction(
     from leadthrough.model.robots.registry import ur10e
 
     folder = Path(folder) / "ur10e"
-    robot = robot or _quiet(ur10e)
+    robot = robot or quietly(ur10e)
     table = json.loads((folder / "description" / "published_identification.json").read_text())
     linear = next(value for key, value in table.items() if key.startswith("linear_friction"))
     rows = []
     for j in range(robot.n_joints):
-        log = _quiet(read_log, folder / "jointwise" / f"ur-20_01_22-joint_{j + 1}.csv", robot)
+        log = quietly(read_log, folder / "jointwise" / f"ur-20_01_22-joint_{j + 1}.csv", robot)
         model, report, q, qd, tau = identify_joint(log, robot, j)
         fv, fc, f0 = linear[j]
         curve = _linear_curve(fv, fc, f0)
@@ -132,10 +132,10 @@ def panda_friction(
     from leadthrough.model.robots.urdf import from_urdf
 
     folder = Path(folder) / "panda_gaz2019"
-    robot = robot or _quiet(from_urdf, folder / "panda_identified.urdf")
+    robot = robot or quietly(from_urdf, folder / "panda_identified.urdf")
     table = json.loads((folder / "published_identification.json").read_text())
     phi = next(value for key, value in table.items() if key.startswith("friction_sigmoid"))
-    log = _quiet(read_log, folder, robot)
+    log = quietly(read_log, folder, robot)
     dynamics = Dynamics(robot)
     samples = friction_samples(log, dynamics)
     model, report = fit_friction(samples, dynamics)
@@ -157,7 +157,7 @@ def _sigmoid_curve(p1: float, p2: float, p3: float) -> Curve:
     return lambda qd, q: p1 * sigmoid(p2 * (qd + p3)) - p1 * sigmoid(p2 * p3)
 
 
-def _quiet(function: Callable, *args: object) -> object:
+def quietly(function: Callable, *args: object) -> object:
     """Call ``function`` without its warnings (assumed drive data, dropped rows: known)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -18,9 +18,9 @@ import numpy as np
 from leadthrough.experiments.real_dynamics import dynamics_table, ur10e_dynamics_study
 from leadthrough.experiments.real_friction import (
     JointFriction,
-    _quiet,
     friction_table,
     panda_friction,
+    quietly,
     ur10e_friction,
 )
 from leadthrough.friction.identification import fit_friction, friction_samples
@@ -72,7 +72,7 @@ def write_logs_report(
 ) -> str:
     """Friction and dynamics of ``robot`` from ``logs``, judged on ``held_out`` logs."""
     out.mkdir(parents=True, exist_ok=True)
-    fitted = [_quiet(read_log, path, robot) for path in logs]
+    fitted = [quietly(read_log, path, robot) for path in logs]
     dynamics = Dynamics(robot)
     samples = friction_samples(fitted, dynamics)
     friction, friction_report = fit_friction(samples, dynamics)
@@ -90,7 +90,7 @@ def write_logs_report(
              "", "Friction:", "", "```", str(friction_report), "```", "", "Dynamics fit:", "",
              "```", str(report), "```", "", "![friction](friction.png)", ""]  # fmt: skip
     for index, path in enumerate(held_out):
-        log = _quiet(read_log, path, robot)
+        log = quietly(read_log, path, robot)
         errors = {"nominal": prediction_error(log, robot),
                   "ours": prediction_error(log, identified, report.offset)}  # fmt: skip
         predicted = {name: log.tau - error for name, error in errors.items()}
