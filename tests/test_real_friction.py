@@ -8,7 +8,7 @@ from tests.realdata import REALDATA, needs_realdata
 
 import leadthrough as lt
 from leadthrough.experiments.real_friction import panda_friction, ur10e_friction
-from leadthrough.friction.identification import FrictionSamples, fit_friction
+from leadthrough.friction.identification import MIN_LEVEL, FrictionSamples, fit_friction
 
 #: Our residual may exceed the published model's by this factor at most. Ours is fitted by
 #: least squares to these very samples with at least the published model's freedom (minus
@@ -67,35 +67,40 @@ def ur10e_dynamics():
         return lt.Dynamics(lt.robots.ur10e())
 
 
-def test_position_dependence_that_changes_sign_in_the_stroke_is_dropped(ur10e_dynamics):
-    """A 'level' that a quadratic in q would make negative within the stroke is fitted without q."""
-    rng = np.random.default_rng(3)
+def _sweep(amplitude, level, seed):
+    """Friction samples of joint 1 sweeping ±amplitude [rad] around 0 with τ_C(q) = level(q)."""
+    rng = np.random.default_rng(seed)
     t = np.linspace(0.0, 60.0, 6000)
-    q = 1.5 * np.sin(0.2 * np.pi * t)
-    qd = 0.3 * np.pi * np.cos(0.2 * np.pi * t)
-    level = 2.0 * (1.0 - 1.5 * (q / 1.5) ** 2)  # negative near the stroke's ends
-    tau = np.sign(qd) * level + 3.0 * qd + rng.normal(0.0, 0.05, t.size)
-    model, report = fit_friction(_samples(q, qd, tau), ur10e_dynamics, joints=[0])
-    assert not report.position_fitted[0]
-    assert model.position_linear[0] == 0.0 and model.position_quadratic[0] == 0.0
-    assert model.coulomb[0] >= 0.0
+    q = amplitude * np.sin(0.2 * np.pi * t)
+    qd = 0.2 * np.pi * amplitude * np.cos(0.2 * np.pi * t)
+    tau = np.sign(qd) * level(q) + 3.0 * qd + rng.normal(0.0, 0.05, t.size)
+    return _samples(q, qd, tau)
 
 
-def test_position_dependence_positive_in_the_stroke_is_kept_and_held_beyond(ur10e_dynamics):
-    """A real cable-like level is recovered within the stroke and held (not extrapolated) beyond."""
-    rng = np.random.default_rng(4)
-    t = np.linspace(0.0, 60.0, 6000)
-    q = 0.5 + 1.5 * np.sin(0.2 * np.pi * t)
-    qd = 0.3 * np.pi * np.cos(0.2 * np.pi * t)
-    u = (q - 0.5) / 1.5
-    tau = np.sign(qd) * 2.0 * (1.0 + 0.3 * u + 0.4 * u**2) + 3.0 * qd + rng.normal(0, 0.05, t.size)
-    model, report = fit_friction(_samples(q, qd, tau), ur10e_dynamics, joints=[0])
+def test_a_sweep_of_a_2pi_joint_is_never_extrapolated_below_the_minimum_level(ur10e_dynamics):
+    """A curved level seen over ±2 rad of a ±2π joint stays ≥ MIN_LEVEL τ_C over the range."""
+    samples = _sweep(2.0, lambda q: 2.0 * (1.0 - 0.15 * q**2), 3)  # this quadratic: < 0 at 2π
+    model, report = fit_friction(samples, ur10e_dynamics, joints=[0])
+    pose = np.zeros((4001, 6))
+    pose[:, 0] = np.linspace(-2.0 * np.pi, 2.0 * np.pi, 4001)
+    level = np.broadcast_to(model.coulomb_level(pose), pose.shape)[:, 0]
     assert report.position_fitted[0]
+    assert level.min() >= 0.99 * MIN_LEVEL * model.coulomb[0] > 0.0
+
+
+def test_position_dependence_the_data_support_is_recovered(ur10e_dynamics):
+    """A linear cable-like trend over a wide sweep of joint 3 (±π) is recovered unconstrained."""
+    u = lambda q: q / np.pi  # noqa: E731 (joint 3's range is ±π)
+    samples = _sweep(1.5, lambda q: 2.0 * (1.0 + 0.3 * u(q)), 4)
+    samples.q[:, 2], samples.qd[:, 2], samples.tau_friction[:, 2] = (
+        samples.q[:, 0], samples.qd[:, 0], samples.tau_friction[:, 0])  # fmt: skip
+    samples.moved[:, 2] = True
+    model, report = fit_friction(samples, ur10e_dynamics, joints=[2])
+    assert report.position_fitted[2]
     pose = np.zeros((3, 6))
-    pose[:, 0] = [0.5, 2.0, 6.28]
-    level = model.coulomb_level(pose)[:, 0]
-    np.testing.assert_allclose(level[:2], [2.0, 2.0 * 1.7], rtol=0.03)
-    assert level[2] == pytest.approx(level[1], rel=0.01)
+    pose[:, 2] = [-1.5, 0.0, 1.5]
+    expected = 2.0 * (1.0 + 0.3 * u(pose[:, 2]))
+    np.testing.assert_allclose(model.coulomb_level(pose)[:, 2], expected, rtol=0.03)
 
 
 def test_default_joints_skip_a_joint_that_only_twitched(ur10e_dynamics):

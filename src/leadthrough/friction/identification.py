@@ -10,12 +10,10 @@ Per joint, from the logs where that joint moved:
 
 3. sliding samples (|q̇| ≥ ``sliding_velocity``) fix the Coulomb level, its position
    dependence and the viscous coefficient by *linear* least squares,
-   ``τ_f = sign(q̇) τ_C (1 + k₁ u + k₂ u²) + c q̇``. The position terms are fitted only
-   where the runs cover enough of the range, with u spanning the stroke the sliding
-   samples saw (the model holds the end values beyond it, never extrapolating over a
-   ±2π range), and kept only if the level they give stays positive over that stroke:
-   a level that changes sign within the data is the fit absorbing something else
-   (gravity or drive-gain errors), not friction the data support;
+   ``τ_f = sign(q̇) τ_C (1 + k₁ u + k₂ u²) + c q̇`` with τ_C, c ≥ 0. The position terms
+   are fitted only where the runs cover enough of the range, and constrained so that the
+   level stays above ``MIN_LEVEL`` τ_C over the whole joint range (a quadratic fitted
+   to a single sweep of a ±2π joint would otherwise be extrapolated below zero);
 4. the noise σ is the standard deviation of the sliding residual (the thesis' "variance
    of the friction torque at high velocities");
 5. the sigmoid slope A and half-width B are fitted (SciPy ``least_squares``, robust loss)
@@ -40,6 +38,9 @@ from leadthrough.model.dynamics import Dynamics
 
 #: Smallest relative Coulomb error an identification claims (a model is never perfect).
 MIN_RELATIVE_ERROR = 0.03
+#: A fitted position-dependent Coulomb level stays above this fraction of its mid-range value
+#: over the whole joint range (no joint loses its friction at some position).
+MIN_LEVEL = 0.1
 
 
 class IdentificationError(LeadthroughError, ValueError):
@@ -264,17 +265,12 @@ def _fit_joint(
     if sliding.sum() < settings.minimum_samples:
         raise IdentificationError(f"joint {j + 1}: only {sliding.sum()} samples faster than "
                                   f"{settings.sliding_velocity:g} rad/s")  # fmt: skip
-    mid, half = _position_span(q[sliding], robot.q_min[j], robot.q_max[j], settings)
-    with_position = bool(np.isfinite(half))
-    if with_position:
-        u = (q - mid) / half
-        theta, std, residual = _fit_sliding(qd[sliding], u[sliding], tau[sliding], True)
-        with_position = bool(theta[0] > 3.0 * std[0]) and bool(  # a level the data resolve
-            level_stays_positive(theta[1] / theta[0], theta[2] / theta[0])
-        )
-    if not with_position:
-        mid, half = 0.5 * (robot.q_min[j] + robot.q_max[j]), 0.5 * (robot.q_max[j] - robot.q_min[j])
-        u = (q - mid) / half
+    mid, half = 0.5 * (robot.q_min[j] + robot.q_max[j]), 0.5 * (robot.q_max[j] - robot.q_min[j])
+    u = (q - mid) / half
+    with_position = bool(np.ptp(q[sliding]) >= settings.position_span * 2.0 * half)
+    theta, std, residual = _fit_sliding(qd[sliding], u[sliding], tau[sliding], with_position)
+    if with_position and not theta[0] > 3.0 * std[0]:  # no level the data resolve to scale by
+        with_position = False
         theta, std, residual = _fit_sliding(qd[sliding], u[sliding], tau[sliding], False)
     coulomb, viscous = theta[0], theta[-1]
     values["coulomb"][j], values["viscous"][j] = coulomb, max(viscous, 0.0)
@@ -295,7 +291,7 @@ def _fit_joint(
     report.position_fitted[j] = with_position
     slow = np.abs(qd) < 2.0 * settings.sliding_velocity
     if slow.sum() >= 20:
-        u_slow = np.clip(u[slow], -1.0, 1.0)  # as the model holds its ends
+        u_slow = np.clip(u[slow], -1.0, 1.0)  # as the model holds its ends (beyond the range)
         level = coulomb * (1.0 + values["position_linear"][j] * u_slow
                            + values["position_quadratic"][j] * u_slow**2)  # fmt: skip
         start = (values["slope"][j], values["half_width"][j])
@@ -305,29 +301,17 @@ def _fit_joint(
         report.parameter_std["slope"][j], report.parameter_std["half_width"][j] = std
 
 
-def _position_span(
-    q: FloatArray, q_min: float, q_max: float, settings: IdentificationSettings
-) -> tuple[float, float]:
-    """(middle, half) of the stroke ``q`` covers [rad]; half is inf when it covers too little.
-
-    The stroke must cover ``settings.position_span`` of the joint range (of 2π when the
-    range is wider than a turn: a ±2π joint's friction repeats with the motor, not the range).
-    """
-    low, high = float(np.min(q)), float(np.max(q))
-    reference = min(q_max - q_min, 2.0 * np.pi)
-    if high - low < settings.position_span * reference:
-        return 0.5 * (q_min + q_max), float("inf")
-    return 0.5 * (low + high), 0.5 * (high - low)
-
-
 def _fit_sliding(
     qd: FloatArray, u: FloatArray, tau: FloatArray, with_position: bool
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Least squares of ``τ = sign(q̇) (a₀ + a₁ u + a₂ u²) + c q̇``, a₀, c ≥ 0: θ, std(θ), residual.
+    """Least squares of ``τ = sign(q̇) (a₀ + a₁ u + a₂ u²) + c q̇``: θ, std(θ), residual.
 
     Friction dissipates, so the Coulomb level and the viscous coefficient are bounded
-    below by 0: where the rigid-body model is poor (a nominal URDF), an unconstrained fit
-    would return a negative level, which no friction model can hold.
+    below by 0 (where the rigid-body model is poor, a nominal URDF, an unconstrained fit
+    returns a negative level). The position-dependent level must stay above
+    ``MIN_LEVEL`` of its mid-range value over the *whole* joint range, u ∈ [−1, 1], not
+    only over the stroke the samples cover: a quadratic fitted to a fraction of a ±2π
+    range would otherwise be extrapolated below zero.
     """
     from scipy import optimize  # at call time: keeps `import leadthrough` fast
 
@@ -337,10 +321,37 @@ def _fit_sliding(
     lower = np.full(design.shape[1], -np.inf)
     lower[[0, -1]] = 0.0
     theta = optimize.lsq_linear(design, tau, bounds=(lower, np.inf)).x
+    if with_position:
+        # a₀ + a₁u + a₂u² > MIN_LEVEL a₀  ⇔  1 + k₁'u + k₂'u² > 0 with k' = a / ((1 − MIN_LEVEL) a₀)
+        relative = theta[1:3] / ((1.0 - MIN_LEVEL) * max(theta[0], 1e-12))
+        if not level_stays_positive(*relative):
+            theta = _level_bounded_fit(design, tau, theta)
     residual = tau - design @ theta
     dof = max(len(tau) - len(theta), 1)
     covariance = np.linalg.pinv(design.T @ design) * (residual @ residual) / dof
     return theta, np.sqrt(np.diag(covariance)), residual
+
+
+def _level_bounded_fit(design: FloatArray, tau: FloatArray, start: FloatArray) -> FloatArray:
+    """Least squares with ``a₀ + a₁ u + a₂ u² ≥ MIN_LEVEL a₀`` on a fine grid of u ∈ [−1, 1]."""
+    from scipy import optimize
+
+    grid = np.linspace(-1.0, 1.0, 81)
+    rows = np.column_stack([np.full_like(grid, 1.0 - MIN_LEVEL), grid, grid**2, 0.0 * grid])
+    hessian, gradient = design.T @ design, design.T @ tau
+    scale = float(np.trace(hessian)) or 1.0
+    level = max(float(start[0]), 1e-9)
+    initial = np.array([level, 0.0, 0.0, max(float(start[-1]), 0.0)])
+    fit = optimize.minimize(
+        lambda x: (x @ hessian @ x - 2.0 * gradient @ x) / scale,
+        initial,
+        jac=lambda x: 2.0 * (hessian @ x - gradient) / scale,
+        bounds=[(0.0, None), (None, None), (None, None), (0.0, None)],
+        constraints=[{"type": "ineq", "fun": lambda x: rows @ x, "jac": lambda x: rows}],
+        method="SLSQP",
+        options={"maxiter": 200, "ftol": 1e-12},
+    )
+    return fit.x
 
 
 def _fit_sigmoids(
