@@ -27,6 +27,8 @@ COMMANDS = ("info", "simulate", "identify", "demo", "teach", "replay", "experime
 HEAVY = [
     ("leadthrough.twin.session", "run_scenario"),
     ("leadthrough.cli.identify", "run_friction_study"),
+    ("leadthrough.experiments.real_report", "write_realdata_report"),
+    ("leadthrough.experiments.real_report", "write_logs_report"),
     ("leadthrough.experiments.demo", "run_demo"),
     ("leadthrough.experiments.teach", "simulate"),
     ("leadthrough.experiments.teach", "replay_recording"),
@@ -126,7 +128,11 @@ def bad_arguments(draw) -> list[str]:
         "identify": [robot, out_dir, unknown, seed, ["--joints", draw(NAME.filter(
                      lambda s: not _is_joint_list(s)))], ["--log", "missing.csv"],
                      ["--log", "afile"], ["--save-log", "afile/log.csv"],
-                     ["--save-log", "log." + draw(NAME.filter(lambda s: s not in ("csv", "npz")))]],
+                     ["--save-log", "log." + draw(NAME.filter(lambda s: s not in ("csv", "npz")))],
+                     ["--log", "afile", "missing.csv"], ["--held-out", "afile"],
+                     ["--log", "afile", "--held-out", "missing.csv"], ["--realdata", "afile"],
+                     ["--realdata", "adir"], ["--realdata", "missing_dir"],
+                     ["--robot", "ur10e", "--log", "afile", "afile"]],
         "demo": [robot, out_dir, unknown],
         "teach": [robot, unknown, seed, ["--duration", draw(DURATION)], ["--path", draw(NAME)],
                   ["--mode", draw(NAME)], ["--friction", "missing.toml"],

@@ -168,11 +168,22 @@ def test_functions_are_vectorised_over_samples_and_joints(positional):
             np.testing.assert_allclose(std[k, j], model_j.std([qd[k, j]])[0], rtol=1e-13)
 
 
+def test_coulomb_level_holds_its_ends_beyond_the_span():
+    """Far outside its span a level that a quadratic would drive negative stays at the end value."""
+    model = FrictionModel(coulomb=[2.0], slope=[500.0], half_width=[0.001], viscous=[1.0],
+                          noise_std=[0.1], position_linear=[0.2], position_quadratic=[-0.6],
+                          position_mid=[0.5], position_half_range=[0.3])  # fmt: skip
+    far = np.array([[-100.0], [-6.3], [6.3], [100.0]])
+    expected = 2.0 * (1.0 + np.array([-0.2, -0.2, 0.2, 0.2]) - 0.6)
+    np.testing.assert_allclose(model.coulomb_level(far)[:, 0], expected, rtol=1e-14)
+    assert np.all(model.coulomb_level(np.linspace(-20.0, 20.0, 4001)[:, None]) > 0.0)
+
+
 def test_coulomb_level_follows_position_polynomial(positional):
-    """τ_C(q) = τ_C (1 + k₁ u + k₂ u²) with u = (q − mid) / half_range."""
+    """τ_C(q) = τ_C (1 + k₁ u + k₂ u²) with u = (q − mid) / half_range clipped to [−1, 1]."""
     rng = np.random.default_rng(7)
     q = rng.uniform(-3.0, 3.0, (100, N))
-    u = (q - positional.position_mid) / positional.position_half_range
+    u = np.clip((q - positional.position_mid) / positional.position_half_range, -1.0, 1.0)
     k1, k2 = positional.position_linear, positional.position_quadratic
     expected = positional.coulomb * (1.0 + k1 * u + k2 * u**2)
     np.testing.assert_allclose(positional.coulomb_level(q), expected, rtol=1e-13)

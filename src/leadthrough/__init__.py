@@ -22,6 +22,7 @@ from leadthrough.estimation.observer import MomentumObserver, ObserverParameters
 from leadthrough.estimation.wrench import ToolWrench
 from leadthrough.friction.identification import FitReport, identify_friction
 from leadthrough.friction.model import FrictionModel
+from leadthrough.identification.dynamics import DynamicsReport, DynamicsSettings, identify_dynamics
 from leadthrough.logs import JointLog
 from leadthrough.logs.sample import JointState
 from leadthrough.model import robots
@@ -45,6 +46,8 @@ __all__ = [
     "ContactParameters",
     "DHParameters",
     "Dynamics",
+    "DynamicsReport",
+    "DynamicsSettings",
     "FitReport",
     "FrictionModel",
     "InputShapeError",
@@ -68,6 +71,7 @@ __all__ = [
     "__version__",
     "control_loop",
     "detect_contacts",
+    "identify_dynamics",
     "identify_friction",
     "read_log",
     "robots",

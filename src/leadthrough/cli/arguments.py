@@ -126,6 +126,18 @@ def existing_file(text: str) -> Path:
     return path
 
 
+def realdata_directory(text: str) -> Path:
+    """An argument type: a folder laid out as ``../shared/realdata`` (ur10e/, panda_gaz2019/)."""
+    path = Path(text)
+    if not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text}: no such directory")
+    missing = [name for name in ("ur10e", "panda_gaz2019") if not (path / name).is_dir()]
+    if missing:
+        raise argparse.ArgumentTypeError(f"{text}: no {missing[0]}/ folder (expected the "
+                                         "layout of ../shared/realdata)")  # fmt: skip
+    return path
+
+
 def log_file(text: str) -> Path:
     """An argument type: an excitation log to write, ``.csv`` or ``.npz``."""
     path = new_file(text)

@@ -64,6 +64,29 @@ def identify(
     return summary
 
 
+def real_logs(paths: Sequence[Path] | None, held_out: Sequence[Path] = ()) -> bool:
+    """Whether ``--log`` names a real arm's runs (anything but one project excitation log).
+
+    Raises:
+        LogError: A file is in no known log format (found before any work starts).
+    """
+    from leadthrough.runtime.readers import detect_format
+
+    formats = [detect_format(Path(path)) for path in [*(paths or []), *held_out]]
+    return bool(paths) and (len(paths) > 1 or formats[0] != "excitation")
+
+
+def identify_real(args: object) -> str:
+    """``--realdata`` or real ``--log`` runs: friction, dynamics, report.md with figures."""
+    from leadthrough.experiments.real_report import write_logs_report, write_realdata_report
+    from leadthrough.model import robots
+
+    if args.realdata is not None:
+        return write_realdata_report(args.realdata, args.out)
+    robot = robots.load(args.robot, tip=args.tip)
+    return write_logs_report(robot, args.log, args.held_out, args.out)
+
+
 def _twin_config(robot: RobotDescription, seed: int, random_friction: bool) -> object:
     from leadthrough.twin.friction import randomized_friction
     from leadthrough.twin.simulator import TwinConfig

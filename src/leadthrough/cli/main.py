@@ -7,7 +7,7 @@ import sys
 from collections.abc import Sequence
 
 from leadthrough.cli import arguments as arg
-from leadthrough.errors import LeadthroughError
+from leadthrough.errors import LeadthroughError, ParameterError
 from leadthrough.model import robots
 
 _EPILOG_INFO = """examples:
@@ -57,18 +57,29 @@ _EPILOG_IDENTIFY = """examples:
   leadthrough identify                         # excite every joint of the YuMi twin, fit, plot
   leadthrough identify --joints 1,4 --out results/friction
   leadthrough identify --random-friction --seed 3   # a twin with other friction
-  leadthrough identify --log robot.csv   # a real robot's logs: run,t,q1..,qd1..,tau1..
+  leadthrough identify --log robot.csv   # excitation logs: run,t,q1..,qd1..,tau1..
+  leadthrough identify --robot ur10e --log run1.csv run2.csv --held-out run3.csv
+                                         # a real arm's logs: friction, dynamics, held-out
+  leadthrough identify --realdata ../shared/realdata --out out/real
+                                         # the public UR10e and Panda logs vs published
 """
 
 
 def _identify(args: argparse.Namespace) -> int:
-    from leadthrough.cli.identify import identify, parse_joints
+    from leadthrough.cli.identify import identify, identify_real, parse_joints, real_logs
 
+    if args.held_out and not args.log:
+        raise ParameterError("--held-out", "needs --log (the runs to fit)")
+    if args.realdata is not None and args.log:
+        raise ParameterError("--realdata", "give either --realdata or --log, not both")
+    if args.realdata is not None or real_logs(args.log, args.held_out):
+        print(identify_real(args))
+        return 0
     robot = robots.load(args.robot, tip=args.tip)
     summary = identify(
         robot,
         args.out,
-        log=args.log,
+        log=args.log[0] if args.log else None,
         save_log=args.save_log,
         joints=parse_joints(args.joints, robot.n_joints),
         seed=args.seed,
@@ -189,8 +200,15 @@ def build_parser() -> argparse.ArgumentParser:
     identify.add_argument(
         "--log",
         type=arg.existing_file,
-        help="read excitation logs (.csv or .npz) instead of the twin",
+        nargs="+",
+        help="read logs instead of the twin: the project's excitation logs (.csv or .npz), or"
+        " a real arm's runs (UR CSV, Panda text, .mcap) to identify friction and dynamics",
     )
+    identify.add_argument("--held-out", type=arg.existing_file, nargs="+", default=[],
+                          help="runs not fitted, to judge the identified dynamics on")  # fmt: skip
+    identify.add_argument("--realdata", type=arg.realdata_directory,
+                          help="folder of the public UR10e and Panda logs (../shared/realdata):"
+                          " identify them and compare with the published values")  # fmt: skip
     identify.add_argument(
         "--save-log", type=arg.log_file, help="also write the logs (.csv or .npz)"
     )

@@ -56,7 +56,8 @@ class FrictionStudy:
         if self.truth is None:
             return None
         coulomb, viscous = self.truth
-        return self.model.coulomb / coulomb - 1.0, self.model.viscous / viscous - 1.0
+        mid = 0.5 * (self.robot.q_min + self.robot.q_max)
+        return self.model.coulomb_level(mid) / coulomb - 1.0, self.model.viscous / viscous - 1.0
 
     def joint_samples(self, joint: int) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(q, q̇, τ_f) of the logs in which ``joint`` moved, for that joint."""

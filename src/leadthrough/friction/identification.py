@@ -10,8 +10,10 @@ Per joint, from the logs where that joint moved:
 
 3. sliding samples (|q̇| ≥ ``sliding_velocity``) fix the Coulomb level, its position
    dependence and the viscous coefficient by *linear* least squares,
-   ``τ_f = sign(q̇) τ_C (1 + k₁ u + k₂ u²) + c q̇`` (the position terms only where the runs
-   cover enough of the range);
+   ``τ_f = sign(q̇) τ_C (1 + k₁ u + k₂ u²) + c q̇`` with τ_C, c ≥ 0. The position terms
+   are fitted only where the runs cover enough of the range, and constrained so that the
+   level stays above ``MIN_LEVEL`` τ_C over the whole joint range (a quadratic fitted
+   to a single sweep of a ±2π joint would otherwise be extrapolated below zero);
 4. the noise σ is the standard deviation of the sliding residual (the thesis' "variance
    of the friction torque at high velocities");
 5. the sigmoid slope A and half-width B are fitted (SciPy ``least_squares``, robust loss)
@@ -30,12 +32,15 @@ import numpy as np
 
 from leadthrough.errors import LeadthroughError
 from leadthrough.filters import low_pass_signal, pole
-from leadthrough.friction.model import FrictionModel, sigmoid
+from leadthrough.friction.model import FrictionModel, level_stays_positive, sigmoid
 from leadthrough.model.description import FloatArray
 from leadthrough.model.dynamics import Dynamics
 
 #: Smallest relative Coulomb error an identification claims (a model is never perfect).
 MIN_RELATIVE_ERROR = 0.03
+#: A fitted position-dependent Coulomb level stays above this fraction of its mid-range value
+#: over the whole joint range (no joint loses its friction at some position).
+MIN_LEVEL = 0.1
 
 
 class IdentificationError(LeadthroughError, ValueError):
@@ -121,7 +126,9 @@ def identify_friction(
         logs: One log or a list of logs (mappings or objects with arrays ``t`` (N,),
             ``q``, ``qd``, ``tau`` (N, n)); ``tau`` is the measured motor torque, arm side.
         dynamics: Model used to remove gravity and inertia torques.
-        joints: Joints to identify (default: every joint that moved in some log).
+        joints: Joints to identify (default: every joint that moved in some log and
+            slid for at least ``settings.minimum_samples`` samples; a joint that only
+            twitched is left at the prior rather than failing the whole fit).
         settings: Thresholds of the fit.
         prior: Values kept for joints not identified (default: the description's).
 
@@ -146,7 +153,13 @@ def fit_friction(
     """The fit of :func:`identify_friction`, on samples from :func:`friction_samples`."""
     settings = settings or IdentificationSettings()
     moved = np.flatnonzero(samples.moved.any(axis=0))
-    joints = tuple(moved) if joints is None else tuple(joints)
+    if joints is None:
+        joints = tuple(j for j in moved if _sliding_count(samples, j, settings)
+                       >= settings.minimum_samples)  # fmt: skip
+        if not joints:
+            raise IdentificationError(f"no joint slid faster than {settings.sliding_velocity:g}"
+                                      f" rad/s for {settings.minimum_samples} samples")  # fmt: skip
+    joints = tuple(int(j) for j in joints)
     for j in joints:
         if j not in moved:
             raise IdentificationError(f"joint {j + 1} never moved faster than "
@@ -164,6 +177,13 @@ def fit_friction(
     for j in joints:
         _fit_joint(j, samples, dynamics, settings, values, report)
     return FrictionModel(**values), report
+
+
+def _sliding_count(samples: FrictionSamples, j: int, settings: IdentificationSettings) -> int:
+    """Sliding samples of joint ``j`` in the logs where it moved."""
+    return int(
+        np.sum(samples.moved[:, j] & (np.abs(samples.qd[:, j]) >= settings.sliding_velocity))
+    )
 
 
 def friction_samples(
@@ -247,28 +267,33 @@ def _fit_joint(
                                   f"{settings.sliding_velocity:g} rad/s")  # fmt: skip
     mid, half = 0.5 * (robot.q_min[j] + robot.q_max[j]), 0.5 * (robot.q_max[j] - robot.q_min[j])
     u = (q - mid) / half
-    with_position = np.ptp(q[sliding]) >= settings.position_span * 2.0 * half
+    with_position = bool(np.ptp(q[sliding]) >= settings.position_span * 2.0 * half)
     theta, std, residual = _fit_sliding(qd[sliding], u[sliding], tau[sliding], with_position)
+    if with_position and not theta[0] > 3.0 * std[0]:  # no level the data resolve to scale by
+        with_position = False
+        theta, std, residual = _fit_sliding(qd[sliding], u[sliding], tau[sliding], False)
     coulomb, viscous = theta[0], theta[-1]
     values["coulomb"][j], values["viscous"][j] = coulomb, max(viscous, 0.0)
     values["noise_std"][j] = float(np.std(residual))
     values["position_mid"][j], values["position_half_range"][j] = mid, half
+    values["position_linear"][j] = theta[1] / coulomb if with_position else 0.0
+    values["position_quadratic"][j] = theta[2] / coulomb if with_position else 0.0
     if with_position:
-        values["position_linear"][j] = theta[1] / coulomb
-        values["position_quadratic"][j] = theta[2] / coulomb
         report.parameter_std["position_linear"][j] = std[1] / coulomb
         report.parameter_std["position_quadratic"][j] = std[2] / coulomb
     report.parameter_std["coulomb"][j], report.parameter_std["viscous"][j] = std[0], std[-1]
     # what is left unexplained: 3 std of the level plus the spread of the sliding residual
-    values["relative_error"][j] = np.clip((3.0 * std[0] + 2.0 * np.std(residual)) / coulomb,
+    values["relative_error"][j] = np.clip((3.0 * std[0] + 2.0 * np.std(residual))
+                                          / max(coulomb, 1e-12),
                                           MIN_RELATIVE_ERROR, 0.5)  # fmt: skip
     report.residual_rms[j] = float(np.sqrt(np.mean(residual**2)))
     report.samples[j] = sliding.sum()
     report.position_fitted[j] = with_position
     slow = np.abs(qd) < 2.0 * settings.sliding_velocity
     if slow.sum() >= 20:
-        level = coulomb * (1.0 + values["position_linear"][j] * u[slow]
-                           + values["position_quadratic"][j] * u[slow] ** 2)  # fmt: skip
+        u_slow = np.clip(u[slow], -1.0, 1.0)  # as the model holds its ends (beyond the range)
+        level = coulomb * (1.0 + values["position_linear"][j] * u_slow
+                           + values["position_quadratic"][j] * u_slow**2)  # fmt: skip
         start = (values["slope"][j], values["half_width"][j])
         params, std = _fit_sigmoids(qd[slow], level, values["viscous"][j],
                                     values["noise_std"][j], tau[slow], start)  # fmt: skip
@@ -279,17 +304,54 @@ def _fit_joint(
 def _fit_sliding(
     qd: FloatArray, u: FloatArray, tau: FloatArray, with_position: bool
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Linear least squares of ``τ = sign(q̇) (a₀ + a₁ u + a₂ u²) + c q̇``: θ, std(θ), residual."""
-    from scipy import linalg  # at call time: keeps `import leadthrough` fast
+    """Least squares of ``τ = sign(q̇) (a₀ + a₁ u + a₂ u²) + c q̇``: θ, std(θ), residual.
+
+    Friction dissipates, so the Coulomb level and the viscous coefficient are bounded
+    below by 0 (where the rigid-body model is poor, a nominal URDF, an unconstrained fit
+    returns a negative level). The position-dependent level must stay above
+    ``MIN_LEVEL`` of its mid-range value over the *whole* joint range, u ∈ [−1, 1], not
+    only over the stroke the samples cover: a quadratic fitted to a fraction of a ±2π
+    range would otherwise be extrapolated below zero.
+    """
+    from scipy import optimize  # at call time: keeps `import leadthrough` fast
 
     sign = np.sign(qd)
     columns = [sign, sign * u, sign * u * u, qd] if with_position else [sign, qd]
     design = np.column_stack(columns)
-    theta = linalg.lstsq(design, tau)[0]
+    lower = np.full(design.shape[1], -np.inf)
+    lower[[0, -1]] = 0.0
+    theta = optimize.lsq_linear(design, tau, bounds=(lower, np.inf)).x
+    if with_position:
+        # a₀ + a₁u + a₂u² > MIN_LEVEL a₀  ⇔  1 + k₁'u + k₂'u² > 0 with k' = a / ((1 − MIN_LEVEL) a₀)
+        relative = theta[1:3] / ((1.0 - MIN_LEVEL) * max(theta[0], 1e-12))
+        if not level_stays_positive(*relative):
+            theta = _level_bounded_fit(design, tau, theta)
     residual = tau - design @ theta
     dof = max(len(tau) - len(theta), 1)
     covariance = np.linalg.pinv(design.T @ design) * (residual @ residual) / dof
     return theta, np.sqrt(np.diag(covariance)), residual
+
+
+def _level_bounded_fit(design: FloatArray, tau: FloatArray, start: FloatArray) -> FloatArray:
+    """Least squares with ``a₀ + a₁ u + a₂ u² ≥ MIN_LEVEL a₀`` on a fine grid of u ∈ [−1, 1]."""
+    from scipy import optimize
+
+    grid = np.linspace(-1.0, 1.0, 81)
+    rows = np.column_stack([np.full_like(grid, 1.0 - MIN_LEVEL), grid, grid**2, 0.0 * grid])
+    hessian, gradient = design.T @ design, design.T @ tau
+    scale = float(np.trace(hessian)) or 1.0
+    level = max(float(start[0]), 1e-9)
+    initial = np.array([level, 0.0, 0.0, max(float(start[-1]), 0.0)])
+    fit = optimize.minimize(
+        lambda x: (x @ hessian @ x - 2.0 * gradient @ x) / scale,
+        initial,
+        jac=lambda x: 2.0 * (hessian @ x - gradient) / scale,
+        bounds=[(0.0, None), (None, None), (None, None), (0.0, None)],
+        constraints=[{"type": "ineq", "fun": lambda x: rows @ x, "jac": lambda x: rows}],
+        method="SLSQP",
+        options={"maxiter": 200, "ftol": 1e-12},
+    )
+    return fit.x
 
 
 def _fit_sigmoids(
@@ -310,7 +372,7 @@ def _fit_sigmoids(
     Returns:
         (A, B) and their standard deviations.
     """
-    scale = float(np.max(level))
+    scale = max(float(np.max(level)), noise_std, 1e-9)  # a zero level (τ_C bounded at 0)
 
     def residual(log_params: FloatArray) -> FloatArray:
         slope, half_width = np.exp(log_params)

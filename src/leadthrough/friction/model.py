@@ -17,7 +17,12 @@ so that at rest the friction is anywhere within ±τ_C (mean 0, large std) and o
 moving it is known to within ``σ``. Beyond the thesis, the Coulomb level may depend on
 the joint position (the cable effect of §4.1.3), smoothly, with two parameters::
 
-    τ_C(q) = τ_C · (1 + k₁ u + k₂ u²),   u = (q − q_mid) / q_half ∈ [−1, 1] over the range
+    τ_C(q) = τ_C · (1 + k₁ u + k₂ u²),   u = clip((q − q_mid) / q_half, −1, 1)
+
+``q_mid ± q_half`` is the span the dependence describes (the joint range, or the stroke an
+identification saw); beyond it the level holds its end value instead of extrapolating the
+quadratic, so a level positive over u ∈ [−1, 1] (checked on construction) is positive at
+every joint position.
 
 Friction here is the ``τ_f`` of SPEC §1 (``M q̈ + C q̇ + G + τ_f = τ + τ_ext``): it has
 the sign of the motion. Everything is vectorised: arrays broadcast as (..., n).
@@ -58,7 +63,7 @@ class FrictionModel:
     """Gaussian joint friction of n joints; every attribute is an (n,) array.
 
     Attributes:
-        coulomb: Coulomb level τ_C at mid-range [Nm], ≥ 0.
+        coulomb: Coulomb level τ_C at ``position_mid`` [Nm], ≥ 0.
         slope: Sigmoid slope A [s/rad], > 0.
         half_width: Sigmoid half-width B [rad/s], ≥ 0.
         viscous: Viscous coefficient c [Nm s/rad], ≥ 0.
@@ -66,7 +71,9 @@ class FrictionModel:
         position_linear: k₁ of the position-dependent Coulomb level [–].
         position_quadratic: k₂ of the position-dependent Coulomb level [–].
         position_mid: Joint reading where u = 0 [rad].
-        position_half_range: Joint travel from the middle to an end, u = ±1 [rad], > 0.
+        position_half_range: Travel from ``position_mid`` to an end of the span the
+            position dependence describes, u = ±1 [rad], > 0; beyond the span the level
+            holds its end value.
         relative_error: How far the true Coulomb level may be from this model's, as a
             fraction [–] (0.2 unless an identification measured it); controllers size
             their dead-zones with it.
@@ -100,7 +107,7 @@ class FrictionModel:
             _require(name, getattr(self, name) >= 0.0, "≥ 0")
         _require("slope", self.slope > 0.0, "> 0")
         _require("position_half_range", self.position_half_range > 0.0, "> 0")
-        _require("position_linear", _level_stays_positive(self.position_linear,
+        _require("position_linear", level_stays_positive(self.position_linear,
                  self.position_quadratic), "such that τ_C(q) > 0 over the whole range")  # fmt: skip
 
     @cached_property
@@ -139,6 +146,7 @@ class FrictionModel:
         if q is None or not self._position_dependent:
             return self.coulomb
         u = (np.asarray(q, dtype=float) - self.position_mid) / self.position_half_range
+        u = np.clip(u, -1.0, 1.0)  # hold the end values beyond the span: never extrapolate
         return self.coulomb * (1.0 + self.position_linear * u + self.position_quadratic * u * u)
 
     def _sigmoid_terms(
@@ -215,8 +223,9 @@ class FrictionModel:
                                         error.reason) from None  # fmt: skip
 
 
-def _level_stays_positive(linear: FloatArray, quadratic: FloatArray) -> NDArray[np.bool_]:
-    """Whether 1 + k₁ u + k₂ u² > 0 for all u in [−1, 1], per joint."""
+def level_stays_positive(linear: ArrayLike, quadratic: ArrayLike) -> NDArray[np.bool_]:
+    """Whether 1 + k₁ u + k₂ u² > 0 for all u in [−1, 1], per joint (so τ_C(q) > 0 for all q)."""
+    linear, quadratic = np.asarray(linear, dtype=float), np.asarray(quadratic, dtype=float)
     vertex = np.clip(-linear / np.where(quadratic == 0.0, np.inf, 2.0 * quadratic), -1.0, 1.0)
     candidates = np.stack([-np.ones_like(linear), np.ones_like(linear), vertex])
     return np.all(1.0 + linear * candidates + quadratic * candidates**2 > 0.0, axis=0)

@@ -1,0 +1,1 @@
+"""Identification of a robot's dynamics from its logs (between friction and estimation)."""

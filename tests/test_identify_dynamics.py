@@ -1,0 +1,135 @@
+"""identify_dynamics on synthetic logs of a known perturbed UR10e, and on the real UR10e logs."""
+
+import warnings
+from dataclasses import replace
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from tests.realdata import REALDATA, needs_realdata
+
+import leadthrough as lt
+from leadthrough.identification.dynamics import DynamicsIdentificationError
+from leadthrough.identification.prediction import prediction_error, rms
+from leadthrough.identification.smoothing import smooth_derivative
+from leadthrough.model.pinocchio_model import build_model
+
+NOISE = 0.3  # torque noise of the synthetic logs [Nm]
+
+
+@pytest.fixture(scope="module")
+def nominal():
+    """The shipped UR10e (the prior)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return lt.robots.ur10e()
+
+
+def _perturbed(robot, rng):
+    """The UR10e with masses ±20 %, centres of mass moved by 2 cm, armature and friction ±30 %."""
+    joints = []
+    for joint in robot.joints:
+        link = joint.link
+        new_link = lt.LinkInertial(link.mass * rng.uniform(0.8, 1.2),
+                                   link.com + rng.uniform(-0.02, 0.02, 3),
+                                   link.inertia * rng.uniform(0.8, 1.2))  # fmt: skip
+        f = joint.friction
+        friction = replace(f, coulomb=f.coulomb * rng.uniform(0.7, 1.3),
+                           viscous=f.viscous * rng.uniform(0.7, 1.3))  # fmt: skip
+        rotor = joint.rotor_inertia * rng.uniform(0.7, 1.3)
+        joints.append(replace(joint, link=new_link, friction=friction, rotor_inertia=rotor))
+    return replace(robot, joints=tuple(joints))
+
+
+def _log(robot, seed, duration=30.0):
+    """A multi-sine run at irregular times (5–15 ms), torque from Pinocchio RNEA + friction + noise.
+
+    Returns the log and the noiseless torque.
+    """
+    rng = np.random.default_rng(seed)
+    t = np.cumsum(rng.uniform(0.005, 0.015, int(duration / 0.01)))
+    freqs = rng.uniform(0.1, 0.6, (4, 6))
+    amps = rng.uniform(0.1, 0.3, (4, 6))
+    phases = rng.uniform(0, 2 * np.pi, (4, 6))
+    w = 2 * np.pi * freqs
+    arg = w[None] * t[:, None, None] + phases[None]
+    q = robot.home() + np.sum(amps * np.sin(arg), axis=1)
+    qd = np.sum(amps * w * np.cos(arg), axis=1)
+    qdd = -np.sum(amps * w * w * np.sin(arg), axis=1)
+    model = build_model(robot)
+    data = model.createData()
+    rigid = np.array([pin.rnea(model, data, *row) for row in zip(q, qd, qdd, strict=True)])
+    truth = rigid + lt.FrictionModel.from_robot(robot).mean(qd)
+    tau = truth + rng.normal(0.0, NOISE, truth.shape)
+    return lt.JointLog(t=t, q=q, qd=qd + rng.normal(0, 1e-3, qd.shape), tau=tau), truth
+
+
+@pytest.fixture(scope="module")
+def synthetic(nominal):
+    """Truth, training logs, held-out log and the identified description."""
+    truth = _perturbed(nominal, np.random.default_rng(5))
+    train = [_log(truth, seed)[0] for seed in (1, 2)]
+    held_out, clean = _log(truth, 9, duration=15.0)
+    identified, report = lt.identify_dynamics(train, nominal)
+    return truth, held_out, clean, identified, report
+
+
+def test_smoothing_derivative_is_zero_phase_at_irregular_times():
+    """The derivative of a sampled sine at jittered times is its cosine, without lag."""
+    rng = np.random.default_rng(0)
+    t = np.cumsum(rng.uniform(0.002, 0.034, 3000))
+    x = np.sin(2 * np.pi * 0.5 * t)
+    value, slope = smooth_derivative(t, x, 0.03)
+    assert np.max(np.abs(value - x)) < 1e-3
+    assert np.max(np.abs(slope - np.pi * np.cos(np.pi * t))) < 0.01 * np.pi
+
+
+def test_synthetic_prediction_reaches_noise_level_on_held_out(synthetic, nominal):
+    """On a run not fitted, the identified model predicts the noiseless torque within the noise."""
+    _, held_out, clean, identified, _ = synthetic
+    noiseless = lt.JointLog(t=held_out.t, q=held_out.q, qd=held_out.qd, tau=clean)
+    ours = rms(prediction_error(noiseless, identified))
+    before = rms(prediction_error(noiseless, nominal))
+    assert np.all(ours < NOISE), ours
+    assert np.all(ours < 0.5 * before), (ours, before)
+
+
+def test_synthetic_residual_matches_the_noise(synthetic):
+    """The fit's residual RMS per joint is the injected noise (neither under- nor over-fitted)."""
+    report = synthetic[4]
+    np.testing.assert_allclose(report.residual_rms, NOISE, rtol=0.3)
+    np.testing.assert_allclose(report.gain_scale, 1.0, atol=0.05)
+
+
+def test_identified_description_carries_the_inertials(synthetic, nominal):
+    """Dynamics built from the result uses the identified inertials, not the nominal ones."""
+    identified = synthetic[3]
+    q = nominal.home()
+    assert not np.allclose(lt.Dynamics(identified).gravity(q), lt.Dynamics(nominal).gravity(q))
+
+
+def test_log_without_torque_is_one_clear_error(nominal):
+    """A log with no torque is refused with a message naming it."""
+    log = lt.JointLog(t=np.arange(50) * 0.01, q=np.zeros((50, 6)), qd=np.zeros((50, 6)),
+                      source="run.csv")  # fmt: skip
+    with pytest.raises(DynamicsIdentificationError, match=r"run\.csv: no torque"):
+        lt.identify_dynamics(log, nominal)
+
+
+@needs_realdata
+def test_real_ur10e_beats_the_nominal_urdf_on_held_out_runs(nominal):
+    """Fitted on four excitation runs (subsampled), the UR10e predicts held-out runs better."""
+    folder = REALDATA / "ur10e"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        runs = sorted((folder / "identification").glob("*harm*.csv"))[:4]
+        logs = [lt.read_log(path, nominal) for path in runs]
+        identified, report = lt.identify_dynamics(
+            logs, nominal, settings=lt.DynamicsSettings(max_samples=2000)
+        )
+        for name in ("ur-20_01_17-ptp_10_points.csv", "collision_free.csv"):
+            log = lt.read_log(folder / "validation" / name, nominal)
+            ours = rms(prediction_error(log, identified, report.offset))
+            before = rms(prediction_error(log, nominal))
+            assert np.sqrt(np.mean(ours**2)) < 0.8 * np.sqrt(np.mean(before**2)), name
+            assert ours[1] < 0.7 * before[1], name  # joint 2, the worst of the URDF
