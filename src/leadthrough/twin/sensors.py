@@ -70,6 +70,7 @@ class Drives:
 
     def __init__(self, robot: RobotDescription, model: SensorModel) -> None:
         self.limits = robot.torque_limits
+        self._low = -self.limits
         self.harmonic = model.ripple_periods_per_motor_turn * robot.gear_ratios
         self.ripple = model.torque_ripple
         self.gain = np.ones(robot.n_joints) if model.torque_gain is None else np.array(
@@ -77,7 +78,7 @@ class Drives:
 
     def applied(self, command: FloatArray, q: FloatArray) -> FloatArray:
         """Motor torque reaching the joints [Nm] for ``command`` at joint angles ``q``."""
-        saturated = np.clip(command, -self.limits, self.limits)
+        saturated = np.minimum(np.maximum(command, self._low), self.limits)  # np.clip, faster
         return saturated * self.gain * (1.0 + self.ripple * np.sin(self.harmonic * q))
 
 

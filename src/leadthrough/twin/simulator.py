@@ -37,6 +37,11 @@ from leadthrough.twin.sensors import Drives, SensorModel, Sensors
 from leadthrough.validation import real
 
 
+#: The last row of a homogeneous transform, and an identity to fill in.
+_HOMOGENEOUS = np.eye(4)
+_HOMOGENEOUS.setflags(write=False)
+
+
 class TwinError(LeadthroughError, RuntimeError):
     """The twin cannot go on (a bad configuration or a MuJoCo failure)."""
 
@@ -209,6 +214,8 @@ class DigitalTwin(RobotInterface):
     def operator(self, operator: Operator) -> None:
         self._operator = operator
         self._operator_acts = type(operator) is not Operator
+        # a hand that only pulls the flange adds no joint torque (Operator's zeros)
+        self._turns_joints = type(operator).joint_torque is not Operator.joint_torque
 
     # --- the robot interface -------------------------------------------------------------
 
@@ -282,8 +289,8 @@ class DigitalTwin(RobotInterface):
         self.truth = self._sample_truth(tau_operator, wrench, friction, constraint)
 
     def _flange_pose(self) -> FloatArray:
-        pose = np.eye(4)
-        pose[:3, :3] = self.data.site_xmat[self._flange_site].reshape(3, 3)
+        pose = _HOMOGENEOUS.copy()
+        pose[:3, :3].flat = self.data.site_xmat[self._flange_site]
         pose[:3, 3] = self.data.site_xpos[self._flange_site]
         return pose
 
@@ -296,7 +303,8 @@ class DigitalTwin(RobotInterface):
         velocity = jacobian @ self._qvel
         wrench = np.asarray(self.operator.wrench(self.time, self._flange_pose(), velocity), float)
         tau = jacobian.T @ wrench
-        tau += np.asarray(self.operator.joint_torque(self.time, self._qpos, self._qvel), float)
+        if self._turns_joints:
+            tau += np.asarray(self.operator.joint_torque(self.time, self._qpos, self._qvel), float)
         return tau, wrench
 
     def _sample_truth(
