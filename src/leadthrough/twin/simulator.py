@@ -36,7 +36,6 @@ from leadthrough.twin.operator import Operator
 from leadthrough.twin.sensors import Drives, SensorModel, Sensors
 from leadthrough.validation import real
 
-
 #: The last row of a homogeneous transform, and an identity to fill in.
 _HOMOGENEOUS = np.eye(4)
 _HOMOGENEOUS.setflags(write=False)
