@@ -44,6 +44,8 @@ _ERROR = ("relative_error",)
 #: Relative error of the Coulomb levels of a model that does not say (Table 4.1 was tuned by
 #: hand: the project's robustness target, friction off by ±20 %).
 DEFAULT_RELATIVE_ERROR = 0.2
+#: Largest q̇ (in values) whose sigmoid terms are remembered: one sample of any arm.
+_REMEMBERED_SIZE = 64
 #: Default of the optional fields: ``__post_init__`` fills in an (n,) array.
 _FILLED_IN: Any = None
 
@@ -150,10 +152,31 @@ class FrictionModel:
         differences of the two tanh terms: one evaluation serves them all.
         """
         qd = np.asarray(qd, dtype=float)
+        small = qd.size <= _REMEMBERED_SIZE  # one control period's q̇: remember the terms
+        if small:
+            key = (
+                qd.shape,
+                qd.tobytes(),
+                None if q is None else (np.shape(q), np.asarray(q, float).tobytes()),
+            )
+            if key == self._last[0]:
+                return self._last[1]  # type: ignore[no-any-return]
         centre = self._half_slope * qd
         upper = np.tanh(centre + self._half_slope_width)
         lower = np.tanh(centre - self._half_slope_width)
-        return self.coulomb_level(q), self.viscous * qd, upper, lower
+        terms = self.coulomb_level(q), self.viscous * qd, upper, lower
+        if small:
+            self._last[:] = key, terms
+        return terms
+
+    @cached_property
+    def _last(self) -> list[object]:
+        """The latest (key, terms) of :meth:`_sigmoid_terms`.
+
+        A control period asks for the mean, the std and the uncertainty at the same
+        (q̇, q): the observer, then the controller.
+        """
+        return [None, None]
 
     def bounds(self, qd: ArrayLike, q: ArrayLike | None = None) -> tuple[FloatArray, FloatArray]:
         """The sigmoid pair (τ_f,max, τ_f,min) of eqs. (4.2)–(4.3) [Nm], each (..., n)."""
