@@ -254,7 +254,7 @@ class DigitalTwin(RobotInterface):
         tau = np.asarray(tau, dtype=float)
         if tau.shape != (self.n_joints,):
             raise InputShapeError("tau", (self.n_joints,), tau.shape)
-        if not np.isfinite(tau.sum()):  # one reduction: any NaN or ±Inf makes the sum non-finite
+        if np.count_nonzero(np.isfinite(tau)) != tau.size:  # any NaN or ±Inf
             raise TwinError(f"non-finite torque command {tau}")
         self._pending.append(tau.copy())
         command = self._pending.popleft() if self.config.delay_periods else self._pending.pop()
