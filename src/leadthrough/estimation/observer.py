@@ -34,10 +34,10 @@ import math
 from dataclasses import dataclass
 from typing import Literal
 
-import numba
 import numpy as np
 from numpy.typing import ArrayLike
 
+from leadthrough.compiled import kernel
 from leadthrough.errors import ParameterError
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray
@@ -284,7 +284,7 @@ class MomentumObserver:
         return {key: np.array(values) for key, values in levels.items()} | {"threshold": threshold}
 
 
-@numba.njit(cache=True)
+@kernel
 def _time_varying_step(p, tau_hat, previous_drift, cov, std, tau, momentum, coriolis_drift,
                        gravity, friction_mean, friction_std, constants):  # fmt: skip
     """One step of the time-varying filter, all joints, in place (compiled, ~1 µs).

@@ -7,10 +7,10 @@ reasons are only spelled out for a bad one.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from leadthrough.compiled import kernel
 from leadthrough.model.description import FloatArray
 from leadthrough.safety.limits import SafetyLimits
 
@@ -38,7 +38,7 @@ def in_range(readings: tuple[FloatArray, ...], low: FloatArray, high: FloatArray
     return True
 
 
-@numba.njit(cache=True)
+@kernel
 def _within(values: FloatArray, low: FloatArray, high: FloatArray, offset: int) -> bool:
     """Whether ``low[offset + i] <= values[i] <= high[offset + i]`` for all i (NaN: no).
 
@@ -134,7 +134,7 @@ class FrozenEncoders:
         return self._runs >= self.periods
 
 
-@numba.njit(cache=True)
+@kernel
 def _count_repeats(
     q: FloatArray,
     qd: FloatArray,
