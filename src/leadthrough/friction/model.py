@@ -154,29 +154,27 @@ class FrictionModel:
         qd = np.asarray(qd, dtype=float)
         small = qd.size <= _REMEMBERED_SIZE  # one control period's q̇: remember the terms
         if small:
-            key = (
-                qd.shape,
-                qd.tobytes(),
-                None if q is None else (np.shape(q), np.asarray(q, float).tobytes()),
-            )
-            if key == self._last[0]:
-                return self._last[1]  # type: ignore[no-any-return]
+            shape_q = None if q is None else (np.shape(q), np.asarray(q, float).tobytes())
+            key = (qd.shape, qd.tobytes(), shape_q)
+            last = self._last[0]  # one read: another thread may replace it, not tear it
+            if last is not None and last[0] == key:
+                return last[1]  # type: ignore[no-any-return]
         centre = self._half_slope * qd
         upper = np.tanh(centre + self._half_slope_width)
         lower = np.tanh(centre - self._half_slope_width)
         terms = self.coulomb_level(q), self.viscous * qd, upper, lower
         if small:
-            self._last[:] = key, terms
+            self._last[0] = (key, terms)
         return terms
 
     @cached_property
-    def _last(self) -> list[object]:
-        """The latest (key, terms) of :meth:`_sigmoid_terms`.
+    def _last(self) -> list[tuple | None]:
+        """The latest (key, terms) of :meth:`_sigmoid_terms`, in a one-element list.
 
         A control period asks for the mean, the std and the uncertainty at the same
         (q̇, q): the observer, then the controller.
         """
-        return [None, None]
+        return [None]
 
     def bounds(self, qd: ArrayLike, q: ArrayLike | None = None) -> tuple[FloatArray, FloatArray]:
         """The sigmoid pair (τ_f,max, τ_f,min) of eqs. (4.2)–(4.3) [Nm], each (..., n)."""
