@@ -14,7 +14,8 @@ alone, no feedback) until ``reset()``. No exception escapes ``check`` or ``comma
 Messages number the joints from 1 at the base.
 
 Cost: the bounds are computed once, in the constructor; a good sample is validated with
-one vectorised comparison per call, and the reasons, events and per-joint loops only run
+one compiled pass over its readings, the walls and the joint braking are skipped while no
+joint is near a wall or too fast, and the reasons, events and per-joint loops only run
 when something is wrong (a fault, a wall, a joint or the tool too fast).
 
 The settings and bounds are in :mod:`.limits`, the sample checks in :mod:`.checks`, the
