@@ -10,7 +10,7 @@ import pytest
 import leadthrough as lt
 from leadthrough.estimation.observer import MomentumObserver
 from leadthrough.friction.model import FrictionModel
-from leadthrough.safety.checks import FrozenEncoders, _within, in_range
+from leadthrough.safety.checks import FrozenEncoders, in_range, within_bounds
 from leadthrough.safety.supervisor import SupervisorState
 from leadthrough.trajectories import minimum_jerk_phase
 from leadthrough.twin.operator import During
@@ -76,7 +76,7 @@ def test_range_check_agrees_with_numpy_comparisons():
         values = np.concatenate(readings)
         expected = bool(np.all((values >= low[: values.size]) & (values <= high[: values.size])))
         assert in_range(tuple(readings), low, high, 7) is expected
-        assert _within(readings[0], low, high, 0) is bool(
+        assert within_bounds(readings[0], low, high, 0) is bool(
             np.all((readings[0] >= low[:7]) & (readings[0] <= high[:7]))
         )
     assert not in_range((np.zeros(6),), low, high, 7)

@@ -32,14 +32,14 @@ def in_range(readings: tuple[FloatArray, ...], low: FloatArray, high: FloatArray
     """
     shape, offset = (n,), 0
     for reading in readings:
-        if reading.shape != shape or not _within(reading, low, high, offset):
+        if reading.shape != shape or not within_bounds(reading, low, high, offset):
             return False
         offset += n
     return True
 
 
 @kernel
-def _within(values: FloatArray, low: FloatArray, high: FloatArray, offset: int) -> bool:
+def within_bounds(values: FloatArray, low: FloatArray, high: FloatArray, offset: int) -> bool:
     """Whether ``low[offset + i] <= values[i] <= high[offset + i]`` for all i (NaN: no).
 
     Compiled: ~0.2 µs against ~3 µs for the NumPy comparisons and their reduction.

@@ -38,12 +38,12 @@ from leadthrough.model.snapshot import ModelSnapshot
 from leadthrough.safety import braking
 from leadthrough.safety.checks import (
     FrozenEncoders,
-    _within,
     command_problem,
     floats,
     in_range,
     sample_reason,
     trusted_velocity,
+    within_bounds,
 )
 from leadthrough.safety.limits import SafetyLimits, SafetyParameters
 from leadthrough.validation import real
@@ -265,7 +265,9 @@ class SafetySupervisor:
         None (no torque) while no joint is inside a wall, nor was the period before.
         """
         limits, robot = self._limits, self.robot
-        if "soft_limit" not in self._active and _within(q, limits.wall_low, limits.wall_high, 0):
+        if "soft_limit" not in self._active and within_bounds(
+            q, limits.wall_low, limits.wall_high, 0
+        ):
             return None
         damping_time = self.parameters.wall_damping_time
         torque, inside = braking.walls(limits, q, qd, inertia, damping_time)
@@ -282,7 +284,9 @@ class SafetySupervisor:
         None (no torque) while no joint is too fast, nor was the period before.
         """
         limits = self._limits
-        if "joint_speed" not in self._active and _within(qd, limits.speed_low, limits.speed, 0):
+        if "joint_speed" not in self._active and within_bounds(
+            qd, limits.speed_low, limits.speed, 0
+        ):
             return None
         braking_time = self.parameters.braking_time
         torque, fast = braking.joint_braking(limits, qd, inertia, braking_time)
