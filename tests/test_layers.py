@@ -18,7 +18,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "src" / "leadthrough"
 
 #: The core from the bottom up; a module may import its own layer and those below.
 LAYERS = (
-    ("errors", "validation", "filters", "trajectories", "progress"),
+    ("errors", "validation", "filters", "trajectories", "progress", "compiled"),
     ("model",),
     ("logs",),
     ("friction",),

@@ -18,9 +18,15 @@ def minimum_jerk_phase(t: ArrayLike, duration: float) -> tuple[FloatArray, Float
     Returns:
         The phase ``s ∈ [0, 1]`` [-] and its rate ``ṡ`` [1/s], each of the shape of ``t``.
     """
-    tau = np.clip(np.asarray(t, dtype=float) / duration, 0.0, 1.0)
+    one_time = isinstance(t, float | int)  # the twin's hand, every period: float math
+    if one_time:
+        tau = min(max(t / duration, 0.0), 1.0)  # what np.clip gives, NaN included
+    else:
+        tau = np.minimum(np.maximum(np.asarray(t, dtype=float) / duration, 0.0), 1.0)
     phase = tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
     rate = 30.0 * tau**2 * (1.0 - tau) ** 2 / duration
+    if one_time:  # the same bits as NumPy's, as NumPy scalars
+        return np.float64(phase), np.float64(rate)
     return phase, rate
 
 

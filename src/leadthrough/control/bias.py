@@ -57,7 +57,8 @@ class ModelErrorBias:
         residual = estimate - self.bias
         if unguided > 0.0:
             rate = unguided * dt / self.learning_time
-            self.bias = np.clip(self.bias + rate * residual, -bound, bound)
+            # np.clip's result (NaN included) at half its cost
+            self.bias = np.minimum(np.maximum(self.bias + rate * residual, -bound), bound)
             self._gravity_learned = self._gravity_learned + rate * (gravity - self._gravity_learned)
             self.confidence += rate * (1.0 - self.confidence)
         return estimate - self.bias

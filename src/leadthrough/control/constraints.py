@@ -22,6 +22,10 @@ from leadthrough.model.dynamics import Dynamics
 from leadthrough.model.snapshot import ModelSnapshot
 from leadthrough.validation import real, real_array
 
+#: The world axes, unit vectors (rows).
+_AXES = np.eye(3)
+_AXES.setflags(write=False)
+
 
 @dataclass(frozen=True)
 class VirtualConstraint(ABC):
@@ -105,7 +109,7 @@ class Box(VirtualConstraint):
         """Push back through each face that is crossed."""
         lower, upper = np.asarray(self.lower, dtype=float), np.asarray(self.upper, dtype=float)
         total = np.zeros(3)
-        for axis, unit in enumerate(np.eye(3)):
+        for axis, unit in enumerate(_AXES):
             below, above = lower[axis] - position[axis], position[axis] - upper[axis]
             if below > 0:
                 total += self._push(below, unit, velocity)

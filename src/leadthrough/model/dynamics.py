@@ -42,7 +42,7 @@ class Dynamics:
         self.n = robot.n_joints
         self._flange = self.model.getFrameId(FLANGE_FRAME)
         self._tcp = self.model.getFrameId(TCP_FRAME)
-        self._upper_triangle = np.triu(np.ones((self.n, self.n), dtype=bool))
+        self._lower_triangle = np.tril(np.ones((self.n, self.n), dtype=bool), -1)
 
     def snapshot(self, q: ArrayLike, qd: ArrayLike) -> ModelSnapshot:
         """Everything a control period needs of the model at (q [rad], q̇ [rad/s]), once.
@@ -67,8 +67,9 @@ class Dynamics:
         return self._mass(self._vector(q, "q"))
 
     def _mass(self, q: FloatArray) -> FloatArray:
-        upper = pin.crba(self.model, self.data, q)
-        return np.where(self._upper_triangle, upper, upper.T)
+        mass = pin.crba(self.model, self.data, q).copy()  # its upper triangle is M's
+        np.copyto(mass, mass.T, where=self._lower_triangle)
+        return mass
 
     def coriolis(self, q: ArrayLike, qd: ArrayLike) -> FloatArray:
         """Coriolis/centrifugal matrix C(q, q̇) [kg m²/s], (n, n), Christoffel form."""

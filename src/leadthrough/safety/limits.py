@@ -71,6 +71,7 @@ class SafetyLimits:
         qd_bound: Velocity readings beyond ± this are faults [rad/s], shape (n,).
         tau_bound: Torque readings beyond ± this are faults [Nm], shape (n,).
         speed: Joint speed limits, braked above [rad/s], shape (n,).
+        speed_low: ``-speed`` [rad/s], shape (n,).
         wall_low: The lower soft walls start below this [rad], shape (n,).
         wall_high: The upper soft walls start above this [rad], shape (n,).
         stiffness: Wall stiffness [Nm/rad], shape (n,).
@@ -87,6 +88,7 @@ class SafetyLimits:
     qd_bound: FloatArray
     tau_bound: FloatArray
     speed: FloatArray
+    speed_low: FloatArray
     wall_low: FloatArray
     wall_high: FloatArray
     stiffness: FloatArray
@@ -111,6 +113,7 @@ class SafetyLimits:
             qd_bound=qd_bound,
             tau_bound=tau_bound,
             speed=p.joint_speed_fraction * robot.velocity_limits,
+            speed_low=-p.joint_speed_fraction * robot.velocity_limits,
             wall_low=robot.q_min + p.soft_limit_margin,
             wall_high=robot.q_max - p.soft_limit_margin,
             stiffness=p.wall_torque_fraction * robot.torque_limits / p.soft_limit_margin,

@@ -14,7 +14,8 @@ alone, no feedback) until ``reset()``. No exception escapes ``check`` or ``comma
 Messages number the joints from 1 at the base.
 
 Cost: the bounds are computed once, in the constructor; a good sample is validated with
-one vectorised comparison per call, and the reasons, events and per-joint loops only run
+one compiled pass over its readings, the walls and the joint braking are skipped while no
+joint is near a wall or too fast, and the reasons, events and per-joint loops only run
 when something is wrong (a fault, a wall, a joint or the tool too fast).
 
 The settings and bounds are in :mod:`.limits`, the sample checks in :mod:`.checks`, the
@@ -42,6 +43,7 @@ from leadthrough.safety.checks import (
     in_range,
     sample_reason,
     trusted_velocity,
+    within_bounds,
 )
 from leadthrough.safety.limits import SafetyLimits, SafetyParameters
 from leadthrough.validation import real
@@ -244,21 +246,29 @@ class SafetySupervisor:
         tau = self._limits.saturated(tau_desired)  # a huge command cannot swamp the safety
         braking_torque = self._joint_braking(qd, inertia)
         if self.state is SupervisorState.TEACHING:
-            braking_torque = braking_torque + self._tool_braking(model.tool_jacobian, qd, mass)
-        braked = braking_torque != 0.0
-        if braked.any():
-            # while braking, the brakes win: the controller's torque on a braked joint is
-            # replaced by gravity compensation, so no controller can push through the limit
-            tau = np.where(braked, model.gravity, tau)
-        tau += self._walls(q, qd, inertia) + braking_torque
-        if not np.isfinite(tau).all():
+            braking_torque = _sum(braking_torque, self._tool_braking(model.tool_jacobian, qd, mass))
+        if braking_torque is not None:
+            braked = braking_torque != 0.0
+            if np.count_nonzero(braked):
+                # while braking, the brakes win: the controller's torque on a braked joint is
+                # replaced by gravity compensation, so no controller can push through the limit
+                tau = np.where(braked, model.gravity, tau)
+        tau = _sum(tau, _sum(self._walls(q, qd, inertia), braking_torque))
+        if np.count_nonzero(np.isfinite(tau)) != tau.size:  # type: ignore[arg-type]
             self._fault("non-finite safety torque")
             return None
-        return self._limits.saturated(tau)
+        return self._limits.saturated(tau)  # type: ignore[arg-type]
 
-    def _walls(self, q: FloatArray, qd: FloatArray, inertia: FloatArray) -> FloatArray:
-        """The soft walls' torque [Nm] (see :func:`.braking.walls`), logging each entry."""
+    def _walls(self, q: FloatArray, qd: FloatArray, inertia: FloatArray) -> FloatArray | None:
+        """The soft walls' torque [Nm] (see :func:`.braking.walls`), logging each entry.
+
+        None (no torque) while no joint is inside a wall, nor was the period before.
+        """
         limits, robot = self._limits, self.robot
+        if "soft_limit" not in self._active and within_bounds(
+            q, limits.wall_low, limits.wall_high, 0
+        ):
+            return None
         damping_time = self.parameters.wall_damping_time
         torque, inside = braking.walls(limits, q, qd, inertia, damping_time)
         for i in self._started("soft_limit", inside):
@@ -268,9 +278,16 @@ class SafetySupervisor:
             self._log("soft_limit", f"{detail} (hard limit {hard:.4g} rad)")
         return torque
 
-    def _joint_braking(self, qd: FloatArray, inertia: FloatArray) -> FloatArray:
-        """Joint braking torque [Nm] (see :func:`.braking.joint_braking`), logging each episode."""
+    def _joint_braking(self, qd: FloatArray, inertia: FloatArray) -> FloatArray | None:
+        """Joint braking torque [Nm] (see :func:`.braking.joint_braking`), logging each episode.
+
+        None (no torque) while no joint is too fast, nor was the period before.
+        """
         limits = self._limits
+        if "joint_speed" not in self._active and within_bounds(
+            qd, limits.speed_low, limits.speed, 0
+        ):
+            return None
         braking_time = self.parameters.braking_time
         torque, fast = braking.joint_braking(limits, qd, inertia, braking_time)
         for i in self._started("joint_speed", fast):
@@ -278,18 +295,22 @@ class SafetySupervisor:
             self._log("joint_speed", f"{detail}: braking")
         return torque
 
-    def _tool_braking(self, jacobian: FloatArray, qd: FloatArray, mass: FloatArray) -> FloatArray:
+    def _tool_braking(
+        self, jacobian: FloatArray, qd: FloatArray, mass: FloatArray
+    ) -> FloatArray | None:
         """Tool braking torque [Nm] (see :func:`.braking.tool_braking`), logging each episode.
 
-        ``jacobian`` is the TCP's (6, n): the tool tip, not the flange, is limited.
+        ``jacobian`` is the TCP's (6, n): the tool tip, not the flange, is limited. None
+        (no torque) while the tool is within its speed limit.
         """
         p = self.parameters
         limit = p.tool_speed_limit
         torque, speed = braking.tool_braking(jacobian, mass, qd, limit, p.braking_time)
-        self.max_tool_speed = max(self.max_tool_speed, speed)
+        if speed > self.max_tool_speed:
+            self.max_tool_speed = speed
         if self._began("tool_speed", speed > limit):
             self._log("tool_speed", f"tool speed {speed:.3g} m/s above {limit:.3g} m/s: braking")
-        return torque
+        return torque if speed > limit else None
 
     def _safe_stop(self, qd: object) -> FloatArray:
         """Gravity hold at the last good position, damped for the first part of the stop."""
@@ -374,6 +395,13 @@ class SafetySupervisor:
     def _clear_episodes(self) -> None:
         self._encoders.clear()
         self._active: dict[str, NDArray[np.bool_]] = {}
+
+
+def _sum(a: FloatArray | None, b: FloatArray | None) -> FloatArray | None:
+    """``a + b`` of two torques [Nm], None standing for no torque (zeros)."""
+    if a is None or b is None:
+        return b if a is None else a
+    return a + b
 
 
 #: Placeholder reason while a fault is latched: ``_fault`` keeps the first reason only.

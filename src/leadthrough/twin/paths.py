@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
+from functools import cached_property
 from typing import ClassVar
 
 import numpy as np
@@ -47,6 +48,10 @@ class Path(ABC):
     def velocity(self, t: ArrayLike) -> FloatArray:
         """Reference velocity [m/s, world] at time(s) ``t`` [s]: shape ``(3,)`` or ``(N, 3)``."""
 
+    def reference(self, t: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """:meth:`position` and :meth:`velocity` at ``t`` [s] (paths share their timing law)."""
+        return self.position(t), self.velocity(t)
+
 
 class _PointToPoint(Path):
     """Minimum-jerk motion along the segment between two points named by ``_ENDPOINTS``."""
@@ -58,20 +63,27 @@ class _PointToPoint(Path):
             _set(self, name, check.vector(name, getattr(self, name)))
         _set(self, "duration", _duration(self.duration))
 
+    @cached_property
     def _segment(self) -> tuple[FloatArray, FloatArray]:
         """Start point [m] and displacement to the end point [m]."""
         first, last = (getattr(self, name) for name in self._ENDPOINTS)
         return first, last - first
 
+    def reference(self, t: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """:meth:`position` and :meth:`velocity` at ``t`` [s], one timing evaluation."""
+        start, displacement = self._segment
+        phase, rate = minimum_jerk_phase(t, self.duration)
+        return start + phase[..., None] * displacement, rate[..., None] * displacement
+
     def position(self, t: ArrayLike) -> FloatArray:
         """Reference position [m, world] at time(s) ``t`` [s]: shape ``(3,)`` or ``(N, 3)``."""
-        start, displacement = self._segment()
+        start, displacement = self._segment
         phase, _ = minimum_jerk_phase(t, self.duration)
         return start + phase[..., None] * displacement
 
     def velocity(self, t: ArrayLike) -> FloatArray:
         """Reference velocity [m/s, world] at time(s) ``t`` [s]: shape ``(3,)`` or ``(N, 3)``."""
-        _, displacement = self._segment()
+        _, displacement = self._segment
         _, rate = minimum_jerk_phase(t, self.duration)
         return rate[..., None] * displacement
 
@@ -170,6 +182,14 @@ class Circle(Path):
         u, w = self._frame()
         angle, rate = self._angle(t)
         return self.radius * rate * (-np.sin(angle) * u + np.cos(angle) * w)
+
+    def reference(self, t: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """:meth:`position` and :meth:`velocity` at ``t`` [s], one timing evaluation."""
+        u, w = self._frame()
+        angle, rate = self._angle(t)
+        cos, sin = np.cos(angle), np.sin(angle)
+        return (self.center + self.radius * (cos * u + sin * w),
+                self.radius * rate * (-sin * u + cos * w))  # fmt: skip
 
 
 def _unit(name: str, vector: FloatArray) -> FloatArray:

@@ -36,6 +36,10 @@ from leadthrough.twin.operator import Operator
 from leadthrough.twin.sensors import Drives, SensorModel, Sensors
 from leadthrough.validation import real
 
+#: The last row of a homogeneous transform, and an identity to fill in.
+_HOMOGENEOUS = np.eye(4)
+_HOMOGENEOUS.setflags(write=False)
+
 
 class TwinError(LeadthroughError, RuntimeError):
     """The twin cannot go on (a bad configuration or a MuJoCo failure)."""
@@ -209,6 +213,8 @@ class DigitalTwin(RobotInterface):
     def operator(self, operator: Operator) -> None:
         self._operator = operator
         self._operator_acts = type(operator) is not Operator
+        # a hand that only pulls the flange adds no joint torque (Operator's zeros)
+        self._turns_joints = type(operator).joint_torque is not Operator.joint_torque
 
     # --- the robot interface -------------------------------------------------------------
 
@@ -248,7 +254,7 @@ class DigitalTwin(RobotInterface):
         tau = np.asarray(tau, dtype=float)
         if tau.shape != (self.n_joints,):
             raise InputShapeError("tau", (self.n_joints,), tau.shape)
-        if not np.isfinite(tau.sum()):  # one reduction: any NaN or ±Inf makes the sum non-finite
+        if np.count_nonzero(np.isfinite(tau)) != tau.size:  # any NaN or ±Inf
             raise TwinError(f"non-finite torque command {tau}")
         self._pending.append(tau.copy())
         command = self._pending.popleft() if self.config.delay_periods else self._pending.pop()
@@ -282,8 +288,8 @@ class DigitalTwin(RobotInterface):
         self.truth = self._sample_truth(tau_operator, wrench, friction, constraint)
 
     def _flange_pose(self) -> FloatArray:
-        pose = np.eye(4)
-        pose[:3, :3] = self.data.site_xmat[self._flange_site].reshape(3, 3)
+        pose = _HOMOGENEOUS.copy()
+        pose[:3, :3].flat = self.data.site_xmat[self._flange_site]
         pose[:3, 3] = self.data.site_xpos[self._flange_site]
         return pose
 
@@ -296,7 +302,8 @@ class DigitalTwin(RobotInterface):
         velocity = jacobian @ self._qvel
         wrench = np.asarray(self.operator.wrench(self.time, self._flange_pose(), velocity), float)
         tau = jacobian.T @ wrench
-        tau += np.asarray(self.operator.joint_torque(self.time, self._qpos, self._qvel), float)
+        if self._turns_joints:
+            tau += np.asarray(self.operator.joint_torque(self.time, self._qpos, self._qvel), float)
         return tau, wrench
 
     def _sample_truth(

@@ -1,0 +1,142 @@
+"""Speed work changes no behaviour: seeded step and twin outputs against a stored reference.
+
+``data/speed_reference.npz`` holds the outputs of :class:`LeadThrough` ``step`` over long
+seeded sequences (passive and active, with and without a measured torque, calibration,
+virtual constraints, a sensor fault, the two-level observer, the Panda) and of seeded twin
+runs (a hand on the tool, the table, lead-through in the loop), computed at commit
+2b53732, before the speed work. A faster step must reproduce them.
+
+Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
+mode), never to make a speed change pass::
+
+    PYTHONPATH=src python tests/test_speed_reference.py
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import leadthrough as lt
+from leadthrough.control.constraints import Box, KeepOutSphere, Plane
+from leadthrough.control.feedforward import GravityCompensation
+from leadthrough.control.parameters import LeadThroughParameters
+from leadthrough.estimation.observer import ObserverParameters
+from leadthrough.logs.sample import JointState
+from leadthrough.twin.runner import simulate
+from leadthrough.twin.scenarios import scenario
+
+REFERENCE = Path(__file__).parent / "data" / "speed_reference.npz"
+STEPS = 2000
+STRIDE = 20  # every 20th period is stored (the whole sequence is computed)
+
+
+def step_outputs(
+    robot: lt.RobotDescription,
+    seed: int,
+    mode: str,
+    calibrate: bool = False,
+    constraints: tuple = (),
+    fault_at: int | None = None,
+    measured: bool = True,
+    parameters: LeadThroughParameters | None = None,
+) -> np.ndarray:
+    """Command, τ̂_ext and its std [Nm] of every period over a seeded random motion.
+
+    The arm rests, creeps, moves and swings fast in turns of 300 periods (tool speed
+    braking included); ``fault_at`` puts a NaN in one position reading.
+    """
+    rng = np.random.default_rng(seed)
+    controller = lt.LeadThrough(robot, mode, calibrate=calibrate, constraints=constraints,
+                                parameters=parameters)  # fmt: skip
+    gravity = lt.Dynamics(robot).gravity
+    n = robot.n_joints
+    q, qd = robot.home().copy(), np.zeros(n)
+    low, high = robot.q_min + 0.05, robot.q_max - 0.05
+    rows = []
+    for k in range(STEPS):
+        scale = (0.0, 0.05, 0.5, 1.5)[(k // 300) % 4]
+        qd = 0.9 * qd + 0.1 * scale * rng.standard_normal(n)
+        if scale == 0.0:
+            qd = 1e-4 * rng.standard_normal(n)
+        q = np.clip(q + controller.dt * qd, low, high)
+        tau = gravity(q) + rng.normal(0.0, 0.5, n) if measured else None
+        reading = q.copy()
+        if k == fault_at:
+            reading[3] = np.nan
+        command = controller.step(JointState(controller.dt * (k + 1), reading, qd, tau))
+        rows.append(np.concatenate([command, controller.tau_ext_hat, controller.std]))
+    return np.array(rows)[::STRIDE]
+
+
+def twin_outputs(name: str, controller_for: Callable[[lt.RobotDescription], object]) -> np.ndarray:
+    """What a seeded twin run of scenario ``name`` measured, sent and truly did, 2 s."""
+    robot = lt.robots.yumi()
+    twin = scenario(name, robot).twin(robot)
+    run = simulate(twin, controller_for(robot), 2.0, progress=False)  # type: ignore[arg-type]
+    signals = (run.qd, run.tau_measured, run.tau_command, run.q_true, run.tau_ext,
+               run.tau_friction, run.ft_wrench)  # fmt: skip
+    return np.hstack(signals)[::STRIDE]
+
+
+def _box() -> Box:
+    return Box(lower=(0.0, -0.3, 0.0), upper=(0.5, 0.3, 0.5))
+
+
+def _gravity_only(robot: lt.RobotDescription) -> GravityCompensation:
+    return GravityCompensation(lt.Dynamics(robot))
+
+
+def _yumi(seed: int, mode: str, **options: object) -> Callable[[], np.ndarray]:
+    return lambda: step_outputs(lt.robots.yumi(), seed, mode, **options)  # type: ignore[arg-type]
+
+
+TWO_LEVEL = LeadThroughParameters(observer=ObserverParameters(variant="two_level"))
+CASES: dict[str, Callable[[], np.ndarray]] = {
+    "passive": _yumi(100, "passive"),
+    "active": _yumi(101, "active"),
+    "active, no measured torque": _yumi(102, "active", measured=False),
+    "active, calibration": _yumi(103, "active", calibrate=True),
+    "passive, calibration": _yumi(104, "passive", calibrate=True),
+    "active, constraints": _yumi(105, "active", constraints=(
+        Plane(point=(0.3, 0.0, 0.2), normal=(0.0, 0.0, 1.0)), _box())),
+    "passive, constraints": _yumi(106, "passive", constraints=(
+        _box(), KeepOutSphere(center=(0.4, 0.1, 0.3), radius=0.15))),
+    "active, sensor fault": _yumi(107, "active", fault_at=1200),
+    "active, two-level observer": _yumi(108, "active", parameters=TWO_LEVEL),
+    "panda, active": lambda: step_outputs(lt.robots.panda(), 7, "active"),
+    "twin line, gravity only": lambda: twin_outputs("line", _gravity_only),
+    "twin table push, gravity only": lambda: twin_outputs("table_push", _gravity_only),
+    "twin line, active": lambda: twin_outputs("line", lambda r: lt.LeadThrough(r, "active")),
+    "twin idle, calibrated active": lambda: twin_outputs(
+        "idle", lambda r: lt.LeadThrough(r, "active", calibrate=True)),
+}  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def reference() -> dict[str, np.ndarray]:
+    """The stored outputs of commit 2b53732."""
+    with np.load(REFERENCE) as stored:
+        return {name: stored[name] for name in stored.files}
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_outputs_equal_the_reference_before_the_speed_work(case, reference):
+    """Every stored period agrees to 1e-9 (relative, or absolute below 1 Nm)."""
+    outputs = CASES[case]()
+    expected = reference[case]
+    assert outputs.shape == expected.shape
+    np.testing.assert_allclose(outputs, expected, rtol=1e-9, atol=1e-9, equal_nan=True)
+
+
+def write_reference() -> None:
+    """Compute every case with the code on the path and store it (see the module docstring)."""
+    REFERENCE.parent.mkdir(exist_ok=True)
+    np.savez_compressed(REFERENCE, **{name: compute() for name, compute in CASES.items()})
+
+
+if __name__ == "__main__":
+    write_reference()
