@@ -10,6 +10,7 @@ from leadthrough.model.description import RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.twin.mjcf import Payload
 from leadthrough.twin.model_error import ModelError
+from leadthrough.twin.sensors import SensorModel
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig
 
 HARMONICS = 5
@@ -33,14 +34,17 @@ def record(
     motion_seed: int = 0,
     duration: float = 20.0,
     amplitude: float = 0.15,
+    sensors: SensorModel | None = None,
 ) -> JointLog:
     """A run of the twin tracking a Fourier motion about home, with the payload on.
 
     The plant carries ``payload`` on top of ``model_error``; the tracker uses the nominal
-    ``robot``; the log holds the twin's measured torque (what a real arm reports).
+    ``robot``; the log holds the twin's measured torque (what a real arm reports;
+    ``sensors.torque_gain`` makes its drive gains differ from the nominal ones).
     """
     error = replace(model_error, payload=payload)
-    twin = DigitalTwin(robot, TwinConfig(model_error=error, seed=seed))
+    config = TwinConfig(model_error=error, seed=seed, sensors=sensors or SensorModel())
+    twin = DigitalTwin(robot, config)
     tracker = JointTracker(Dynamics(robot), bandwidth=4.0)
     home = robot.home()
     amplitudes, omega, phases = excitation(robot.n_joints, motion_seed, amplitude)

@@ -11,11 +11,14 @@ from leadthrough.estimation.log_observer import LogInputError
 from leadthrough.estimation.payload import PayloadError, PayloadParameters, _PayloadRegressor
 from leadthrough.twin.mjcf import Payload
 from leadthrough.twin.model_error import ModelError
+from leadthrough.twin.sensors import SensorModel
 from payload_runs import record
 
 #: The plant differs from the description: link masses ±5 %, COMs ±5 mm (seeded).
 MODEL_ERROR = ModelError(mass_error=0.05, com_error=0.005)
 AMPLITUDE = 0.4  # [rad] of the Fourier excitation's first harmonic
+#: The twin measures the torque its drives apply: no drive-gain error to allow for.
+EXACT_GAINS = PayloadParameters(gain_error=0.0)
 PAYLOADS = [Payload(0.5, (0.03, -0.02, 0.04)), Payload(1.2, (0.0, 0.0, 0.1)),
             Payload(2.0, (-0.04, 0.02, 0.06)), Payload(3.0, (0.01, 0.05, 0.02))]  # fmt: skip
 
@@ -61,7 +64,7 @@ def test_regressor_matches_inverse_dynamics_with_a_payload(ur10e):
 def test_unloaded_runs_cancel_the_model_error(ur10e, empty, loaded, index):
     """With runs of the same motion unloaded: mass within 0.1 kg, std < 0.1 kg, truth ±3 std."""
     truth = PAYLOADS[index]
-    estimate = lt.estimate_payload(loaded[index], ur10e, unloaded=[empty])
+    estimate = lt.estimate_payload(loaded[index], ur10e, unloaded=[empty], parameters=EXACT_GAINS)
     assert abs(estimate.mass - truth.mass) < 0.1, estimate
     assert estimate.mass_std < 0.1, estimate
     assert abs(estimate.mass - truth.mass) <= 3 * estimate.mass_std, estimate
@@ -74,7 +77,7 @@ def test_unloaded_runs_cancel_the_model_error(ur10e, empty, loaded, index):
 def test_nominal_model_alone_std_covers_its_error(ur10e, loaded):
     """Without unloaded runs the model error biases the mass; the std says so (±3 std), < 0.3 kg."""
     for truth, log in zip(PAYLOADS, loaded, strict=True):
-        estimate = lt.estimate_payload(log, ur10e)
+        estimate = lt.estimate_payload(log, ur10e, parameters=EXACT_GAINS)
         assert abs(estimate.mass - truth.mass) <= 3 * estimate.mass_std, (truth, estimate)
         assert estimate.mass_std < 0.3, estimate
         assert abs(estimate.mass - truth.mass) < 0.4, (truth, estimate)
@@ -84,14 +87,14 @@ def test_exact_model_reads_the_mass_without_unloaded_runs(ur10e):
     """When the description is the plant (no model error) the mass is within 0.1 kg."""
     truth = Payload(1.5, (0.0, 0.02, 0.05))
     log = record(ur10e, truth, ModelError(), seed=2, amplitude=AMPLITUDE)
-    estimate = lt.estimate_payload([log], ur10e)
+    estimate = lt.estimate_payload([log], ur10e, parameters=EXACT_GAINS)
     assert abs(estimate.mass - truth.mass) < 0.1, estimate
 
 
 def test_zero_payload_reads_zero_on_another_motion(ur10e, empty):
     """No payload, unloaded runs of a different motion: |m| < 0.1 kg and within ±3 std."""
     other = record(ur10e, None, MODEL_ERROR, seed=1, amplitude=AMPLITUDE, motion_seed=5)
-    estimate = lt.estimate_payload(empty, ur10e, unloaded=other)
+    estimate = lt.estimate_payload(empty, ur10e, unloaded=other, parameters=EXACT_GAINS)
     assert abs(estimate.mass) < 0.1, estimate
     assert abs(estimate.mass) <= 3 * estimate.mass_std, estimate
 
@@ -99,9 +102,22 @@ def test_zero_payload_reads_zero_on_another_motion(ur10e, empty):
 def test_different_unloaded_motion_still_reads_the_mass(ur10e, loaded):
     """Unloaded runs of another motion: the 2 kg payload within 0.15 kg and ±3 std."""
     other = record(ur10e, None, MODEL_ERROR, seed=1, amplitude=AMPLITUDE, motion_seed=5)
-    estimate = lt.estimate_payload(loaded[2], ur10e, unloaded=[other])
+    estimate = lt.estimate_payload(loaded[2], ur10e, unloaded=[other], parameters=EXACT_GAINS)
     assert abs(estimate.mass - 2.0) < 0.15, estimate
     assert abs(estimate.mass - 2.0) <= 3 * estimate.mass_std, estimate
+
+
+def test_a_drive_gain_error_scales_the_mass_and_the_default_std_covers_it(ur10e):
+    """Drive gains 8 % above nominal: the 2.5 kg payload reads ≈ 8 % low, within ±3 std."""
+    truth = Payload(2.5, (0.0, 0.03, 0.06))
+    sensors = SensorModel(torque_gain=(1.08,) * ur10e.n_joints)
+    runs = [record(ur10e, p, MODEL_ERROR, seed=1, amplitude=AMPLITUDE, sensors=sensors)
+            for p in (truth, None)]  # fmt: skip
+    estimate = lt.estimate_payload(runs[0], ur10e, unloaded=runs[1])
+    assert estimate.mass / truth.mass == pytest.approx(1 / 1.08, abs=0.03), estimate
+    assert abs(estimate.mass - truth.mass) <= 3 * estimate.mass_std, estimate
+    exact = lt.estimate_payload(runs[0], ur10e, unloaded=runs[1], parameters=EXACT_GAINS)
+    assert abs(exact.mass - truth.mass) > 3 * exact.mass_std  # what gain_error is for
 
 
 def test_bad_input_is_one_line_error(ur10e, empty):

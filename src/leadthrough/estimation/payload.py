@@ -22,7 +22,9 @@ Assumptions (the estimate is only as good as they are):
   (``unloaded=``, ideally the same motions), their apparent payload is estimated in the
   same way and subtracted: the unloaded model's error then cancels.
 - Measured torque is K·i with the robot's torque constants: a gain error of x % scales
-  the mass by x %.
+  the mass by x % (unloaded runs do not cancel it). ``gain_error`` (5 %) puts that into
+  the std; the UR10e's published K and its controller's own ratio differ by 11–14 % on
+  joints 2–3, so identify K (``lt.identify_dynamics``) or weigh a known mass once.
 - Samples are weighted by the model's torque uncertainty: a floor, a relative error of
   the rigid-body torque and the friction model's std (at rest the friction may hold
   anything up to its Coulomb level, so static samples say little on joints with large
@@ -81,6 +83,9 @@ class PayloadParameters:
         model_error: Relative systematic error of each joint's rigid-body model torque,
             propagated into the covariance (it does not average out over samples) [–].
             With ``unloaded`` runs of the same motions it cancels.
+        gain_error: Relative error of each joint's drive gain (K of τ = K·i, or a
+            torque sensor's scale) [–]; it scales the payload's torque, so unloaded runs
+            do not cancel it. 0 when the torque is known exactly (a simulation).
     """
 
     smoothing_time: float = 0.15
@@ -91,11 +96,13 @@ class PayloadParameters:
     prior_offset: float = 10.0
     prior_friction: float = 0.5
     model_error: float = 0.03
+    gain_error: float = 0.05
 
     def __post_init__(self) -> None:
         for name in ("smoothing_time", "sample_period", "block_time", "torque_floor"):
             real(name, getattr(self, name), minimum=0.0, strict=True, error=ParameterError)
-        for name in ("rigid_body_error", "prior_offset", "prior_friction", "model_error"):
+        for name in ("rigid_body_error", "prior_offset", "prior_friction", "model_error",
+                     "gain_error"):  # fmt: skip
             real(name, getattr(self, name), minimum=0.0, error=ParameterError)
 
 
@@ -136,6 +143,7 @@ class _Rows:
     nuisance: FloatArray  # (N n, 3 n)
     residual: FloatArray  # (N n,)
     model: FloatArray  # (N n,)  the unloaded model's rigid-body torque
+    measured: FloatArray  # (N n,)  the measured (smoothed) torque
     std: FloatArray  # (N n,)  prior torque std per row
     block: FloatArray  # (N n,)  cluster label
     joint: FloatArray  # (N n,)  joint index
@@ -179,12 +187,14 @@ def estimate_payload(
         return _fit(rows, parameters, coulomb, regressor.point_inertia_parameters)
 
     loaded = fit(logs)
-    theta, covariance, bias = loaded.theta, loaded.covariance, loaded.bias
+    theta, covariance = loaded.theta, loaded.covariance
+    bias, gain = loaded.bias, loaded.gain_bias
     if unloaded:
         empty = fit([unloaded] if isinstance(unloaded, JointLog) else list(unloaded))
         theta, covariance = theta - empty.theta, covariance + empty.covariance
-        bias = bias - empty.bias  # the same model error shifts both fits alike
-    systematic = parameters.model_error**2 * (bias @ bias.T)
+        bias, gain = bias - empty.bias, gain - empty.gain_bias  # shifted alike in both fits
+    systematic = (parameters.model_error**2 * (bias @ bias.T)
+                  + parameters.gain_error**2 * (gain @ gain.T))  # fmt: skip
     return _estimate(theta, covariance + systematic, loaded.rms, loaded.count)
 
 
@@ -193,7 +203,8 @@ class _Fit:
     """One regression of θ = (m, m c).
 
     ``bias`` (4, n) is the shift of θ if joint j's rigid-body model torque were 100 %
-    too large: a systematic error that more samples do not average away.
+    too large: a systematic error that more samples do not average away; ``gain_bias``
+    (4, n) the shift if joint j's measured torque were 100 % too large (its drive gain).
     """
 
     theta: FloatArray
@@ -201,6 +212,7 @@ class _Fit:
     rms: FloatArray
     count: int
     bias: FloatArray
+    gain_bias: FloatArray
 
 
 class _PayloadRegressor:
@@ -264,8 +276,9 @@ def _rows(
             sigma = np.sqrt(parameters.torque_floor**2 + std**2
                             + (parameters.rigid_body_error * model) ** 2)  # fmt: skip
             block = blocks + np.floor((t[k] - t[0]) / parameters.block_time)
-            parts.append((payload, inertia, _nuisance(qd_s[k], friction), tau_s[k] - model - mean,
-                          model, sigma, np.full(n, block), np.arange(n, dtype=float)))  # fmt: skip
+            parts.append((payload, inertia, _nuisance(qd_s[k], friction),
+                          tau_s[k] - model - mean, model, tau_s[k], sigma, np.full(n, block),
+                          np.arange(n, dtype=float)))  # fmt: skip
         blocks += np.floor(log.duration / parameters.block_time) + 1.0
     stacked = [np.concatenate(column) for column in zip(*parts, strict=True)]
     return _Rows(*stacked)
@@ -314,7 +327,8 @@ def _fit(
         std = std * np.maximum(ratio, 1e-3)[joint]
     # a model torque too large by 100 % on joint j lowers every residual of joint j by it
     bias = np.column_stack([-gain[:4, joint == j] @ rows.model[joint == j] for j in range(n)])
-    return _Fit(theta, covariance[:4, :4], rms, rows.residual.size // n, bias)
+    scaled = np.column_stack([gain[:4, joint == j] @ rows.measured[joint == j] for j in range(n)])
+    return _Fit(theta, covariance[:4, :4], rms, rows.residual.size // n, bias, scaled)
 
 
 def _weighted_solve(
