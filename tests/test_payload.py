@@ -9,10 +9,10 @@ import leadthrough as lt
 from leadthrough.errors import ParameterError
 from leadthrough.estimation.log_observer import LogInputError
 from leadthrough.estimation.payload import PayloadError, PayloadParameters, _PayloadRegressor
+from leadthrough.experiments.payload_runs import record
 from leadthrough.twin.mjcf import Payload
 from leadthrough.twin.model_error import ModelError
 from leadthrough.twin.sensors import SensorModel
-from payload_runs import record
 
 #: The plant differs from the description: link masses ±5 %, COMs ±5 mm (seeded).
 MODEL_ERROR = ModelError(mass_error=0.05, com_error=0.005)

@@ -1,4 +1,4 @@
-"""Twin runs of a UR10e carrying known payloads, for the payload estimator's tests."""
+"""Twin runs of an arm carrying known payloads (tests and benchmarks of estimate_payload)."""
 
 from dataclasses import replace
 
