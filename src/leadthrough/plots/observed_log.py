@@ -33,8 +33,11 @@ def plot_observed_log(
     t = observed.t - observed.t[0]
     band = 2.0 * observed.std
     for joint, axis in enumerate(axes.flat):
-        if joint >= n:
+        if joint >= n:  # an empty slot: the panel above it gets the time axis
             axis.set_visible(False)
+            above = axes.flat[joint - columns]
+            above.tick_params(labelbottom=True)
+            above.set_xlabel("time from the log's start [s]")
             continue
         estimate = observed.tau_ext[:, joint]
         axis.fill_between(t, estimate - band[:, joint], estimate + band[:, joint],
