@@ -43,15 +43,19 @@ def loaded(ur10e):
     return [record(ur10e, p, MODEL_ERROR, seed=1, amplitude=AMPLITUDE) for p in PAYLOADS]
 
 
-def test_regressor_matches_inverse_dynamics_with_a_payload(ur10e):
+@pytest.mark.parametrize("name", ["ur10e", "panda", "yumi"])
+def test_regressor_matches_inverse_dynamics_with_a_payload(name):
     """Y_p θ plus the point-mass inertia term is τ(with payload) − τ(without), any state."""
-    regressor = _PayloadRegressor(ur10e)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        robot = lt.robots.load(name)
+    regressor = _PayloadRegressor(robot)
     rng = np.random.default_rng(0)
     mass, com = 2.3, np.array([0.04, -0.03, 0.09])
-    carrying = lt.Dynamics(ur10e.with_payload(mass, com))
+    carrying = lt.Dynamics(robot.with_payload(mass, com))
     theta = np.concatenate([[mass], mass * com])
     for _ in range(5):
-        q, qd, qdd = rng.uniform(-2, 2, (3, ur10e.n_joints))
+        q, qd, qdd = rng.uniform(-2, 2, (3, robot.n_joints))
         payload, inertia = regressor.columns(q, qd, qdd)
         added = carrying.inverse_dynamics(q, qd, qdd) - regressor.dynamics.inverse_dynamics(
             q, qd, qdd
