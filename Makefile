@@ -33,6 +33,8 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/effort_plants.py
 	$(BIN)/python benchmarks/guiding_quality.py
 	$(BIN)/python benchmarks/real_identification.py
+	$(BIN)/python benchmarks/payload_twin.py
+	$(BIN)/python benchmarks/real_observer.py
 
 # Every figure, table and number the README shows, from seeded runs (a few minutes).
 docs: $(STAMP)

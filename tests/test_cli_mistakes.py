@@ -22,7 +22,7 @@ import leadthrough as lt
 from leadthrough.cli.main import main
 from leadthrough.runtime.recording import SessionRecorder, read_recording
 
-COMMANDS = ("info", "simulate", "identify", "demo", "teach", "replay", "experiments")
+COMMANDS = ("info", "simulate", "identify", "demo", "teach", "replay", "experiments", "inspect")
 #: Where each command's heavy work starts (module, attribute).
 HEAVY = [
     ("leadthrough.twin.session", "run_scenario"),
@@ -33,6 +33,7 @@ HEAVY = [
     ("leadthrough.experiments.teach", "simulate"),
     ("leadthrough.experiments.teach", "replay_recording"),
     ("leadthrough.experiments.report", "write_experiments"),
+    ("leadthrough.experiments.real_logs", "inspect_log"),
 ]
 
 
@@ -53,6 +54,8 @@ def workdir(tmp_path_factory) -> Path:
             rec.record(0.004 * k, q, 0 * q, 0 * q, 0 * q, 0 * q, "active", "teaching")
     data = (root / "taught.mcap").read_bytes()
     (root / "cut.mcap").write_bytes(data[: len(data) // 2])
+    (root / "garbage.csv").write_text("a,b,c\n1,2\n")
+    (root / "yumi.csv").write_text(lt.robots.yumi().name)  # not a log either
     return root
 
 
@@ -143,6 +146,10 @@ def bad_arguments(draw) -> list[str]:
                    ["taught.mcap", "--seed", draw(SEED)], ["taught.mcap", "--out", "afile"],
                    ["taught.mcap", *unknown]],
         "experiments": [robot, out_dir, unknown],
+        "inspect": [["missing.csv"], ["garbage.csv"], ["adir"], ["yumi.csv"],
+                    ["taught.mcap", *robot], ["taught.mcap", *out_dir], ["taught.mcap", *unknown],
+                    ["taught.mcap", "--friction", "missing.toml"],
+                    ["taught.mcap", "--friction", "afile"], ["cut.mcap"]],
     }[command]  # fmt: skip
     option = draw(st.sampled_from(bad))
     if draw(st.booleans()) and option[0].startswith("--") and len(option) == 2:
@@ -240,3 +247,14 @@ def test_closed_stdout_ends_quietly():
     process.stdout.close()  # before the child writes: its first write meets a closed pipe
     err = process.stderr.read().decode()
     assert process.wait(timeout=60) == 0 and err == ""
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [["inspect", "missing.csv"], ["inspect", "garbage.csv"], ["inspect", "adir"],
+     ["inspect", "taught.mcap", "--robot", "ur10e"], ["inspect", "cut.mcap"]],
+    ids=" ".join,
+)  # fmt: skip
+def test_inspect_mistakes_are_one_line(workdir, argv):
+    """inspect: a missing, unreadable, garbage or wrong-robot log is one line and exit 2."""
+    assert_one_line_error(*run(argv, workdir)[::2])

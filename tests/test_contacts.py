@@ -7,7 +7,13 @@ import pytest
 
 import leadthrough as lt
 from leadthrough.estimation.contacts import ContactDetector, ContactParameters
-from leadthrough.estimation.log_observer import LogInputError, observe_log
+from leadthrough.estimation.log_observer import (
+    LogInputError,
+    ModelUncertainty,
+    gravity_scale,
+    observe_log,
+    run_detector,
+)
 from realdata import REALDATA, needs_realdata
 
 
@@ -147,7 +153,42 @@ def test_the_pushes_during_slow_motion_are_found(ur10e):
 
 
 @needs_realdata
-@pytest.mark.parametrize("relative", ["pushes/no_torque.csv", "validation/collision_free.csv"])
+@pytest.mark.parametrize(
+    "relative",
+    [
+        "pushes/no_torque.csv",
+        "validation/collision_free.csv",
+        "validation/ur-20_01_17-ptp_10_points.csv",
+    ],
+)
 def test_nothing_is_found_in_free_motion(ur10e, relative):
     """Free-motion runs with the nominal model: no event."""
     assert lt.detect_contacts(read(relative, ur10e), ur10e, None) == []
+
+
+def test_gravity_scale_is_zero_on_a_vertical_axis_and_sets_a_std_floor(ur10e):
+    """Joint 1 (vertical axis) carries no gravity; every std ≥ ε_g · G_rms of its joint."""
+    scale = gravity_scale(ur10e)
+    assert scale[0] == pytest.approx(0.0, abs=1e-9)
+    assert scale[1] > scale[2] > scale[3] > 0.0  # shoulder, elbow, wrist 1
+    observed = observe_log(synthetic_log(ur10e), ur10e, None, ModelUncertainty(gravity=0.2))
+    assert np.all(observed.std_model >= 0.2 * scale - 1e-9)
+
+
+def test_a_gravity_offset_where_gravity_crosses_zero_is_no_contact(ur10e):
+    """Joint 2 sweeping slowly through upright (G ≈ 0) with 12 Nm of gravity model error.
+
+    Without the ε_g floor the relative error says σ ≈ 4 Nm there and the offset reads as
+    a contact; with it (default) it does not.
+    """
+    dynamics, friction = lt.Dynamics(ur10e), lt.FrictionModel.from_robot(ur10e)
+    t = np.arange(0.0, 10.0, 0.01)
+    q = np.tile([0.0, -np.pi / 2, 0.0, -np.pi / 2, 0.0, 0.0], (t.size, 1))
+    qd = np.zeros_like(q)
+    q[:, 1] += 0.05 * (t - 5.0)
+    qd[:, 1] = 0.05
+    tau = np.array([dynamics.gravity(x) for x in q]) + friction.mean(qd, q)
+    log = lt.JointLog(t, q, qd, tau=tau + np.array([0.0, 12.0, 0.0, 0.0, 0.0, 0.0]))
+    bare = observe_log(log, ur10e, None, ModelUncertainty(gravity=0.0))
+    assert len(run_detector(bare)) == 1
+    assert lt.detect_contacts(log, ur10e, None) == []

@@ -19,6 +19,7 @@ from leadthrough.errors import (
 from leadthrough.estimation.contacts import ContactEvent, ContactParameters
 from leadthrough.estimation.log_observer import detect_contacts
 from leadthrough.estimation.observer import MomentumObserver, ObserverParameters
+from leadthrough.estimation.payload import PayloadEstimate, PayloadParameters, estimate_payload
 from leadthrough.estimation.wrench import ToolWrench
 from leadthrough.friction.identification import FitReport, identify_friction
 from leadthrough.friction.model import FrictionModel
@@ -64,6 +65,8 @@ __all__ = [
     "MomentumObserver",
     "ObserverParameters",
     "ParameterError",
+    "PayloadEstimate",
+    "PayloadParameters",
     "Placement",
     "RobotDescription",
     "RobotDescriptionError",
@@ -71,6 +74,7 @@ __all__ = [
     "__version__",
     "control_loop",
     "detect_contacts",
+    "estimate_payload",
     "identify_dynamics",
     "identify_friction",
     "read_log",

@@ -147,6 +147,12 @@ def _experiments(args: argparse.Namespace) -> int:
     return 0
 
 
+def _inspect(args: argparse.Namespace) -> int:
+    from leadthrough.cli.inspect import inspect
+
+    return inspect(args)
+
+
 def _add(commands, name: str, help_text: str, description: str, epilog: str, run):
     parser = commands.add_parser(name, help=help_text, description=description, epilog=epilog,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
@@ -281,6 +287,13 @@ def build_parser() -> argparse.ArgumentParser:
     experiments.add_argument(
         "--out", type=arg.out_directory, default="out/experiments", help="report directory"
     )
+    from leadthrough.cli.inspect import EPILOG, add_arguments
+
+    inspect = _add(commands, "inspect", "the observer and contacts over a robot's log",
+                   "Run the momentum observer over a log at its own rate (currents → K·i), detect"
+                   " contacts and write report.md with τ̂_ext ± 2 std per joint and the"
+                   " false-alarm table.", EPILOG, _inspect)  # fmt: skip
+    add_arguments(inspect, arg.out_directory)
     return parser
 
 

@@ -1,0 +1,72 @@
+"""``leadthrough inspect``: the observer and the contact detector over a robot's log."""
+
+from __future__ import annotations
+
+import argparse
+import warnings
+from pathlib import Path
+
+from leadthrough.estimation.log_observer import measured_torque
+from leadthrough.experiments import real_logs
+from leadthrough.friction.model import FrictionModel
+from leadthrough.model import robots
+from leadthrough.runtime.readers import read_log
+
+EPILOG = """examples:
+  leadthrough inspect ur10e/pushes/ur-static.csv            # a UR10e log (currents)
+  leadthrough inspect run.csv --robot my_ur10e.urdf --friction friction.toml --out out/run
+  leadthrough inspect panda_gaz2019/ --robot panda          # the Panda's text files (a folder)
+"""
+
+
+def existing_log(text: str) -> Path:
+    """An argument type: a log file, or a folder for logs kept as several files."""
+    path = Path(text)
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a log file, got an empty name")
+    if not path.exists():
+        raise argparse.ArgumentTypeError(f"{text}: no such file or folder")
+    return path
+
+
+def add_arguments(parser: argparse.ArgumentParser, out_directory) -> None:
+    """The options of ``inspect`` (``out_directory``: the shared argument type)."""
+    parser.add_argument("log", type=existing_log,
+                        help="UR CSV, Panda text folder, recording or excitation log")  # fmt: skip
+    parser.add_argument("--robot", default="ur10e", metavar="NAME|FILE",
+                        help=f"shipped robot ({', '.join(robots.names())}) or a .toml/.urdf "
+                             "description, nominal or identified (default: ur10e)")  # fmt: skip
+    parser.add_argument("--tip", help="flange link of a URDF (needed when the tree branches)")
+    parser.add_argument("--friction", type=_existing_file,
+                        help="identified friction TOML (default: the robot's own)")  # fmt: skip
+    parser.add_argument("--out", type=out_directory, default="out/inspect",
+                        help="report directory (default: out/inspect)")  # fmt: skip
+
+
+def _existing_file(text: str) -> Path:
+    from leadthrough.cli.arguments import existing_file
+
+    return existing_file(text)
+
+
+def inspect(args: argparse.Namespace) -> int:
+    """Read the log, run the observer and the detector, write the report; print a summary."""
+    log = read_log(args.log)  # currents stay currents: the observer applies the robot's K
+    with warnings.catch_warnings(record=True) as notes:  # shown after the work, not before
+        warnings.simplefilter("always")
+        robot = robots.load(args.robot, tip=args.tip)
+    friction = FrictionModel.load(args.friction) if args.friction else None
+    measured_torque(log, robot)  # joint count, torque or currents and K: checked before the work
+    inspection = real_logs.inspect_log(log, robot, friction)
+    report = real_logs.write_inspection(inspection, str(args.log), args.out)
+    observed = inspection.observed
+    print(f"{args.log}: {observed.t[-1] - observed.t[0]:.1f} s at {1 / observed.dt:.0f} Hz, "
+          f"{len(inspection.events)} contact(s)")  # fmt: skip
+    for event in inspection.events:
+        joints = ",".join(str(j + 1) for j in event.joints)
+        print(f"  {event.start - observed.t[0]:7.2f} … {event.end - observed.t[0]:7.2f} s  "
+              f"joints {joints}  peak {event.peak_torque:.1f} Nm")  # fmt: skip
+    print(f"report: {report}")
+    for note in notes:
+        print(f"note: {note.message}")
+    return 0
