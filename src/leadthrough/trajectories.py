@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -18,16 +20,22 @@ def minimum_jerk_phase(t: ArrayLike, duration: float) -> tuple[FloatArray, Float
     Returns:
         The phase ``s ∈ [0, 1]`` [-] and its rate ``ṡ`` [1/s], each of the shape of ``t``.
     """
-    one_time = isinstance(t, float | int)  # the twin's hand, every period: float math
-    if one_time:
-        tau = min(max(t / duration, 0.0), 1.0)  # what np.clip gives, NaN included
-    else:
-        tau = np.minimum(np.maximum(np.asarray(t, dtype=float) / duration, 0.0), 1.0)
-    phase = tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
-    rate = 30.0 * tau**2 * (1.0 - tau) ** 2 / duration
-    if one_time:  # the same bits as NumPy's, as NumPy scalars
-        return np.float64(phase), np.float64(rate)
-    return phase, rate
+    if isinstance(t, float | int):  # the twin's hand, every period: float math
+        s = min(max(t / duration, 0.0), 1.0)  # what np.clip gives, NaN included
+        # the same bits as NumPy's, as NumPy scalars
+        return np.float64(_phase(s)), np.float64(_rate(s, duration))  # type: ignore[return-value]
+    tau = np.minimum(np.maximum(np.asarray(t, dtype=float) / duration, 0.0), 1.0)
+    return _phase(tau), _rate(tau, duration)
+
+
+def _phase(tau: Any) -> Any:
+    """Minimum-jerk phase of the normalised time ``tau`` (float or array)."""
+    return tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
+
+
+def _rate(tau: Any, duration: float) -> Any:
+    """Its time derivative [1/s]."""
+    return 30.0 * tau**2 * (1.0 - tau) ** 2 / duration
 
 
 def minimum_jerk_acceleration(t: ArrayLike, duration: float) -> FloatArray:

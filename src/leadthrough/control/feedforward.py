@@ -57,7 +57,7 @@ class DelayLine:
         """The entry sent ``delay`` periods ago (a fresh copy)."""
         return self._line[0].copy()
 
-    def push(self, entry: FloatArray) -> None:
+    def push(self, entry: ArrayLike) -> None:
         """Record what is sent this period."""
         self._line.append(np.array(entry, dtype=float))
 

@@ -103,6 +103,8 @@ class CoulombCompensation:
                 the ramp then ends at ``max(q̇₁, 2 q̇₀)``.
         """
         p = self.parameters
+        band: float | FloatArray
+        full: float | FloatArray
         if dead_band is None:
             band, full = p.dead_band, max(p.full_velocity, 2.0 * p.dead_band)
         else:

@@ -154,7 +154,7 @@ def fit_friction(
     settings = settings or IdentificationSettings()
     moved = np.flatnonzero(samples.moved.any(axis=0))
     if joints is None:
-        joints = tuple(j for j in moved if _sliding_count(samples, j, settings)
+        joints = tuple(int(j) for j in moved if _sliding_count(samples, int(j), settings)
                        >= settings.minimum_samples)  # fmt: skip
         if not joints:
             raise IdentificationError(f"no joint slid faster than {settings.sliding_velocity:g}"

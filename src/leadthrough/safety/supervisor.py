@@ -253,8 +253,10 @@ class SafetySupervisor:
                 # while braking, the brakes win: the controller's torque on a braked joint is
                 # replaced by gravity compensation, so no controller can push through the limit
                 tau = np.where(braked, model.gravity, tau)
-        tau = _sum(tau, _sum(self._walls(q, qd, inertia), braking_torque))
-        if np.count_nonzero(np.isfinite(tau)) != tau.size:  # type: ignore[arg-type]
+        safety = _sum(self._walls(q, qd, inertia), braking_torque)
+        if safety is not None:
+            tau = tau + safety
+        if np.count_nonzero(np.isfinite(tau)) != tau.size:
             self._fault("non-finite safety torque")
             return None
         return self._limits.saturated(tau)  # type: ignore[arg-type]
