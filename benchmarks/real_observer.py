@@ -33,6 +33,7 @@ from leadthrough.estimation.log_observer import (
     observe_log,
     run_detector,
 )
+from leadthrough.experiments.real_dynamics import ur10e_dynamics_study
 from leadthrough.experiments.real_logs import events_markdown, false_alarm_markdown
 
 DEFAULT = Path(__file__).resolve().parents[2] / "shared" / "realdata"
@@ -52,29 +53,31 @@ def read(root: Path, relative: str, robot: lt.RobotDescription) -> lt.JointLog:
     return lt.read_log(root / "ur10e" / relative, robot=robot)
 
 
-def false_alarms(root: Path, robot: lt.RobotDescription, results: dict) -> None:
+def false_alarms(
+    root: Path, robot: lt.RobotDescription, results: dict, model: str = "nominal URDF"
+) -> None:
     """Table 1 and the free-motion half of table 2."""
     for name, files in (("free motion", FREE), ("at rest", STATIC)):
         observed = [observe_log(read(root, f, robot), robot) for f in files]
         table = false_alarm_table(observed)
         seconds = sum(o.t[-1] - o.t[0] for o in observed)
-        print(f"\n### UR10e, nominal URDF, {name}: {len(files)} runs, {seconds:.0f} s\n")
+        print(f"\n### UR10e, {model}, {name}: {len(files)} runs, {seconds:.0f} s\n")
         print(false_alarm_markdown(table))
-        results[f"ur10e_{name}"] = {k: v.tolist() for k, v in table.items()}
+        results[f"ur10e_{model}_{name}"] = {k: v.tolist() for k, v in table.items()}
         counts = {f: len(run_detector(o)) for f, o in zip(files, observed, strict=True)}
-        results[f"ur10e_{name}_contacts"] = counts
+        results[f"ur10e_{model}_{name}_contacts"] = counts
         print(f"\ncontacts detected: {sum(counts.values())} "
               f"({', '.join(f'{Path(f).name}: {c}' for f, c in counts.items())})")  # fmt: skip
 
 
-def contacts(root: Path, robot: lt.RobotDescription, results: dict) -> None:
+def contacts(root: Path, robot: lt.RobotDescription, results: dict, label: str = "") -> None:
     """Table 2: the push runs."""
     for relative in PUSHES:
         log = read(root, relative, robot)
         events = lt.detect_contacts(log, robot, None)
-        print(f"\n### Contacts in {relative} ({log.duration:.0f} s)\n")
+        print(f"\n### Contacts in {relative} ({log.duration:.0f} s){label}\n")
         print(events_markdown(events, float(log.t[0])))
-        results[relative] = [(e.start - log.t[0], e.end - log.t[0], list(e.joints),
+        results[relative + label] = [(e.start - log.t[0], e.end - log.t[0], list(e.joints),
                               e.peak.tolist()) for e in events]  # fmt: skip
 
 
@@ -134,6 +137,9 @@ def main() -> int:
     results: dict = {}
     false_alarms(args.data, robot, results)
     contacts(args.data, robot, results)
+    identified = ur10e_dynamics_study(args.data).identified  # fitted on identification/*harm*
+    false_alarms(args.data, identified, results, "identified (lt.identify_dynamics)")
+    contacts(args.data, identified, results, ", identified model")
     drive = Path(lt.__file__).parent / "model" / "robots" / "data" / "panda_drive.toml"
     panda(args.data, drive if drive.is_file() else None, results)
     payload(args.data, robot, results)
