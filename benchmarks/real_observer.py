@@ -123,6 +123,20 @@ def payload(root: Path, robot: lt.RobotDescription, results: dict) -> None:
     results["payload_unloaded_runs"] = rows
 
 
+def payload_identified(root: Path, identified: lt.RobotDescription, results: dict) -> None:
+    """The apparent payload of unloaded runs not fitted, nominal against identified model."""
+    print("\n### Apparent payload of unloaded held-out runs (truth 0 kg), model alone\n")
+    print("| run | nominal URDF [kg] | identified [kg] |")
+    print("|---|---:|---:|")
+    nominal = lt.robots.ur10e()
+    for relative in FREE:
+        row = [lt.estimate_payload(read(root, relative, robot), robot)
+               for robot in (nominal, identified)]  # fmt: skip
+        print(f"| {Path(relative).name} | "
+              + " | ".join(f"{p.mass:+.2f} ± {p.mass_std:.2f}" for p in row) + " |")  # fmt: skip
+        results[f"payload_held_out {relative}"] = [(p.mass, p.mass_std) for p in row]
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=DEFAULT, help="the realdata folder")
@@ -140,6 +154,7 @@ def main() -> int:
     identified = ur10e_dynamics_study(args.data).identified  # fitted on identification/*harm*
     false_alarms(args.data, identified, results, "identified (lt.identify_dynamics)")
     contacts(args.data, identified, results, ", identified model")
+    payload_identified(args.data, identified, results)
     drive = Path(lt.__file__).parent / "model" / "robots" / "data" / "panda_drive.toml"
     panda(args.data, drive if drive.is_file() else None, results)
     payload(args.data, robot, results)
