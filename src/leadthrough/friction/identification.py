@@ -79,6 +79,10 @@ class FitReport:
     position_fitted: np.ndarray
     joints: tuple[int, ...]
 
+    def not_identified(self) -> tuple[int, ...]:
+        """Joints (0-based) not identified: their model values are the prior's."""
+        return tuple(j for j in range(len(self.samples)) if j not in self.joints)
+
     def __str__(self) -> str:
         lines = [f"{'joint':>5}{'samples':>9}{'RMS [Nm]':>10}{'±τ_C':>9}{'±c':>9}{'position':>10}"]
         for j in self.joints:
@@ -123,13 +127,16 @@ def identify_friction(
         dynamics: Model used to remove gravity and inertia torques.
         joints: Joints to identify (default: every joint that moved in some log).
         settings: Thresholds of the fit.
-        prior: Values kept for joints not identified (default: the description's).
+        prior: Values kept for joints not identified (default: the description's);
+            ``report.joints`` names the joints identified, :meth:`FitReport.not_identified`
+            the others.
 
     Returns:
         The identified model and its fit report.
 
     Raises:
-        IdentificationError: A log is malformed, or a requested joint never moved.
+        IdentificationError: A log is malformed, no joint moved, or a requested joint
+            never moved.
     """
     settings = settings or IdentificationSettings()
     samples = friction_samples(logs, dynamics, settings)
@@ -146,7 +153,10 @@ def fit_friction(
     """The fit of :func:`identify_friction`, on samples from :func:`friction_samples`."""
     settings = settings or IdentificationSettings()
     moved = np.flatnonzero(samples.moved.any(axis=0))
-    joints = tuple(moved) if joints is None else tuple(joints)
+    if moved.size == 0:  # nothing to fit: the prior must not come back as a result
+        raise IdentificationError(f"no joint moved faster than {settings.moving_velocity:g} "
+                                  f"rad/s in any log: nothing to identify")  # fmt: skip
+    joints = tuple(int(j) for j in moved) if joints is None else tuple(joints)
     for j in joints:
         if j not in moved:
             raise IdentificationError(f"joint {j + 1} never moved faster than "
