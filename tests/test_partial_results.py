@@ -150,3 +150,20 @@ def test_coulomb_level_of_a_batch_has_a_row_per_pose():
     q = np.zeros((5, friction.n_joints))
     np.testing.assert_array_equal(friction.coulomb_level(q), np.tile(friction.coulomb, (5, 1)))
     assert friction.coulomb_level(q[0]) is friction.coulomb  # one pose: no copy
+
+
+def test_identify_summary_has_no_nan_where_the_truth_is_zero(tmp_path, recwarn):
+    """A twin joint without viscous friction: its relative error reads '–', no warning, no nan."""
+    import dataclasses
+
+    from leadthrough.cli.identify import summarise
+    from leadthrough.experiments.friction_study import run_friction_study
+    from leadthrough.friction.logs import load_logs
+
+    robot = lt.robots.yumi()
+    log = excitation_log(tmp_path / "one.csv", moving=(0,))
+    study = run_friction_study(robot, logs=load_logs(log))
+    truth = (np.full(robot.n_joints, 0.3), np.zeros(robot.n_joints))
+    summary = summarise(dataclasses.replace(study, truth=truth), tmp_path)
+    assert "nan" not in summary.lower() and "c error [%]:   –" in summary
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]

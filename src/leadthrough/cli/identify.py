@@ -101,11 +101,18 @@ def summarise(study: FrictionStudy, out: Path) -> str:
         lines += [
             "",
             "against the twin's true sliding friction (mid-range):",
-            "  τ_C error [%]: " + " ".join(f"{100 * coulomb[j]:+.2f}" for j in joints),
-            "  c error [%]:   " + " ".join(f"{100 * viscous[j]:+.2f}" for j in joints),
+            "  τ_C error [%]: " + " ".join(_percent(coulomb[j]) for j in joints),
+            "  c error [%]:   " + " ".join(_percent(viscous[j]) for j in joints),
         ]
+        if not np.all(np.isfinite(np.concatenate([coulomb[list(joints)], viscous[list(joints)]]))):
+            lines.append("  (–: the twin's true value is 0, no relative error)")
     lines.append(f"parameters: {out / 'friction.toml'}")
     return "\n".join(lines)
+
+
+def _percent(error: float) -> str:
+    """A relative error in %, signed; "–" when it has none (the true value is 0)."""
+    return f"{100 * error:+.2f}" if np.isfinite(error) else "–"
 
 
 def _not_identified(study: FrictionStudy) -> str:
