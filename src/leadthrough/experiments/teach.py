@@ -21,6 +21,7 @@ import numpy as np
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.control.replay import Replayer, plan_replay, replay_errors
 from leadthrough.errors import ParameterError, RecordingError
+from leadthrough.experiments.bounds import MAX_SECONDS, TIME_SCALE_RANGE
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
@@ -33,11 +34,6 @@ from leadthrough.twin.runner import SimulationResult, simulate
 from leadthrough.twin.scenarios import scenario
 from leadthrough.twin.simulator import DigitalTwin
 from leadthrough.validation import real
-
-#: Longest simulated session or replay [s] (results take about 0.3 MB per simulated second).
-MAX_SECONDS = 600.0
-#: Bounds of a replay's time scale, replay duration over taught duration [–].
-TIME_SCALE_RANGE = (0.05, 20.0)
 
 
 class UnidentifiedFrictionWarning(UserWarning):
