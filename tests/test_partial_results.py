@@ -167,3 +167,21 @@ def test_identify_summary_has_no_nan_where_the_truth_is_zero(tmp_path, recwarn):
     summary = summarise(dataclasses.replace(study, truth=truth), tmp_path)
     assert "nan" not in summary.lower() and "c error [%]:   –" in summary
     assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
+def test_a_fault_while_teaching_is_not_silent(tmp_path, monkeypatch):
+    """The supervisor stops the arm mid-session: teach warns naming when and why."""
+    from leadthrough.control.lead_through import LeadThrough
+
+    original = LeadThrough._control
+
+    def failing(self, t, model, tau):
+        if t > 1.2:
+            raise IndexError("injected")
+        return original(self, t, model, tau)
+
+    monkeypatch.setattr(LeadThrough, "_control", failing)
+    with pytest.warns(UserWarning, match=r"stopped the arm at 1\.2\d s: .*IndexError: injected"):
+        summary = teach.teach_on_twin(lt.robots.yumi(), tmp_path / "t.mcap", duration=0.8,
+                                      friction_file=None)  # fmt: skip
+    assert "supervisor fault" in summary
