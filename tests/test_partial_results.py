@@ -185,3 +185,19 @@ def test_a_fault_while_teaching_is_not_silent(tmp_path, monkeypatch):
         summary = teach.teach_on_twin(lt.robots.yumi(), tmp_path / "t.mcap", duration=0.8,
                                       friction_file=None)  # fmt: skip
     assert "supervisor fault" in summary
+
+
+def test_damaged_recording_counts_the_taught_span_not_the_events(tmp_path):
+    """Events before the first sample (a calibration) do not lengthen the 'of … s' total."""
+    robot = lt.robots.yumi()
+    path = tmp_path / "session.mcap"
+    with SessionRecorder(path, robot, {"dt": DT}) as recorder:
+        recorder.event(0.0, "calibration", "started")
+        for k in range(PERIODS):
+            q = robot.home() + 0.1 * np.sin(k * DT)
+            recorder.record(0.9 + k * DT, q, 0 * q, 0 * q, 0 * q, 0 * q, "active", "teaching")
+    data = bytearray(path.read_bytes())
+    data[int(0.4 * len(data)) : int(0.4 * len(data)) + 200] = bytes(200)
+    (tmp_path / "damaged.mcap").write_bytes(bytes(data))
+    recovered = read_recording(tmp_path / "damaged.mcap")
+    assert f"of {(PERIODS - 1) * DT:.1f} s ({len(recovered.t)} of {PERIODS}" in recovered.recovery
