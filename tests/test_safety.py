@@ -145,11 +145,7 @@ def test_garbage_and_internal_errors_never_escape(sup, dyn, monkeypatch):
     monkeypatch.setattr(dyn, "snapshot", lambda q, qd: 1 / 0)
     out = sup.command(0.0, MID, np.zeros(N), np.zeros(N))
     assert sup.fault_reason.startswith("command failed: ZeroDivisionError: division by zero")
-    sup.reset()
-    monkeypatch.setattr(type(sup._limits), "saturated", lambda self, tau: [][3])  # a bug in there
-    sup.command(0.0, MID, np.zeros(N), np.zeros(N))
-    assert sup.fault_reason.startswith("command failed: IndexError: list index out of range (at ")
-    assert "safety/" in sup.fault_reason
+    assert "(at safety/supervisor.py:" in sup.fault_reason  # where, inside the package
     assert np.all(np.isfinite(out)) and np.all(np.abs(out) <= LIMIT)
 
 
