@@ -169,6 +169,7 @@ def test_identify_summary_has_no_nan_where_the_truth_is_zero(tmp_path, recwarn):
     assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
 
 
+@pytest.mark.filterwarnings("ignore::leadthrough.experiments.teach.UnidentifiedFrictionWarning")
 def test_a_fault_while_teaching_is_not_silent(tmp_path, monkeypatch):
     """The supervisor stops the arm mid-session: teach warns naming when and why."""
     from leadthrough.control.lead_through import LeadThrough
