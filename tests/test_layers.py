@@ -135,3 +135,23 @@ def test_importing_the_twin_leaves_the_environment_alone():
     code = "import os, leadthrough.twin.simulator\nprint(os.environ.get('MUJOCO_GL'))"
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
     assert run.stdout.strip() == "None", run.stderr
+
+
+def test_the_command_line_chooses_the_gl_backend_before_mujoco_is_imported():
+    """Importing the CLI loads no MuJoCo; its main sets MUJOCO_GL=egl before MuJoCo's import.
+
+    MuJoCo reads MUJOCO_GL once, at import: imported earlier (it was, through the argument
+    checks), it took GLFW and no picture of the arm was ever rendered from the command line.
+    """
+    env = {key: value for key, value in os.environ.items() if key != "MUJOCO_GL"}
+    code = (
+        "import os, sys\n"
+        "from leadthrough.cli.main import main\n"
+        "print('mujoco' in sys.modules)\n"
+        "main(['info'])\n"
+        "import mujoco\n"
+        "print(os.environ.get('MUJOCO_GL'))"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    lines = run.stdout.strip().splitlines()
+    assert (lines[0], lines[-1]) == ("False", "egl"), run.stderr

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
+from leadthrough.cli.main import main
 from leadthrough.errors import ParameterError, RecordingError
 from leadthrough.experiments import teach
 from leadthrough.runtime.recording import SessionRecorder, read_recording
@@ -101,3 +102,103 @@ def test_teaching_without_identified_friction_warns(tmp_path, monkeypatch):
         pytest.raises(RuntimeError, match="stop before"),
     ):
         teach.teach_on_twin(lt.robots.yumi(), tmp_path / "t.mcap")
+
+
+def excitation_log(path: Path, moving: tuple[int, ...]) -> Path:
+    """A 16 s CSV log of the YuMi at home; joints in ``moving`` swing ±0.5 rad, with friction."""
+    robot, rng = lt.robots.yumi(), np.random.default_rng(0)
+    dynamics, n, t = lt.Dynamics(robot), robot.n_joints, np.arange(4000) * DT
+    q = np.tile(robot.home(), (len(t), 1)) + 1e-6 * rng.standard_normal((len(t), n))
+    qd = 1e-4 * rng.standard_normal((len(t), n))
+    for j in moving:
+        q[:, j] += 0.5 * np.sin(0.4 * np.pi * t)
+        qd[:, j] = 0.2 * np.pi * np.cos(0.4 * np.pi * t)
+    tau = np.array([dynamics.gravity(row) for row in q]) + 0.3 * np.tanh(qd / 0.01) + 0.2 * qd
+    header = ["run", "t"] + [f"{k}{i + 1}" for k in ("q", "qd", "tau") for i in range(n)]
+    np.savetxt(path, np.column_stack([np.zeros(len(t)), t, q, qd, tau]), delimiter=",",
+               header=",".join(header), comments="", fmt="%.9g")  # fmt: skip
+    return path
+
+
+def test_identify_on_a_log_where_nothing_moves_writes_nothing(tmp_path, capsys):
+    """No joint moved: one-line error and exit 2; no friction file (no defaults as results)."""
+    log = excitation_log(tmp_path / "still.csv", moving=())
+    assert main(["identify", "--log", str(log), "--out", str(tmp_path / "id")]) == 2
+    error = capsys.readouterr().err.strip()
+    assert error.startswith("leadthrough: error: no joint moved") and "\n" not in error
+    assert not (tmp_path / "id" / "friction.toml").exists()
+
+
+def test_identify_names_the_joints_it_could_not_identify(tmp_path, capsys):
+    """Only joint 1 moved: it is fitted and plotted; joints 2–7 are named as not identified."""
+    log = excitation_log(tmp_path / "one.csv", moving=(0,))
+    out = tmp_path / "id"
+    assert main(["identify", "--log", str(log), "--out", str(out)]) == 0
+    captured = capsys.readouterr()
+    named = "joints 2, 3, 4, 5, 6, 7 not identified"
+    assert f"leadthrough: warning: {named}" in captured.err and named in captured.out
+    assert (out / "joint1_fig4_6_position_dependence.png").exists()
+    friction = lt.FrictionModel.load(out / "friction.toml")
+    nominal = lt.FrictionModel.from_robot(lt.robots.yumi())
+    np.testing.assert_array_equal(friction.coulomb[1:], nominal.coulomb[1:])
+    assert friction.coulomb[0] == pytest.approx(0.3, rel=0.1)  # the log's τ_C
+
+
+def test_coulomb_level_of_a_batch_has_a_row_per_pose():
+    """τ_C(q) for (m, n) poses is (m, n), with or without position dependence."""
+    friction = lt.FrictionModel.from_robot(lt.robots.yumi())
+    q = np.zeros((5, friction.n_joints))
+    np.testing.assert_array_equal(friction.coulomb_level(q), np.tile(friction.coulomb, (5, 1)))
+    assert friction.coulomb_level(q[0]) is friction.coulomb  # one pose: no copy
+
+
+def test_identify_summary_has_no_nan_where_the_truth_is_zero(tmp_path, recwarn):
+    """A twin joint without viscous friction: its relative error reads '–', no warning, no nan."""
+    import dataclasses
+
+    from leadthrough.cli.identify import summarise
+    from leadthrough.experiments.friction_study import run_friction_study
+    from leadthrough.friction.logs import load_logs
+
+    robot = lt.robots.yumi()
+    log = excitation_log(tmp_path / "one.csv", moving=(0,))
+    study = run_friction_study(robot, logs=load_logs(log))
+    truth = (np.full(robot.n_joints, 0.3), np.zeros(robot.n_joints))
+    summary = summarise(dataclasses.replace(study, truth=truth), tmp_path)
+    assert "nan" not in summary.lower() and "c error [%]:   –" in summary
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
+@pytest.mark.filterwarnings("ignore::leadthrough.experiments.teach.UnidentifiedFrictionWarning")
+def test_a_fault_while_teaching_is_not_silent(tmp_path, monkeypatch):
+    """The supervisor stops the arm mid-session: teach warns naming when and why."""
+    from leadthrough.control.lead_through import LeadThrough
+
+    original = LeadThrough._control
+
+    def failing(self, t, model, tau):
+        if t > 1.2:
+            raise IndexError("injected")
+        return original(self, t, model, tau)
+
+    monkeypatch.setattr(LeadThrough, "_control", failing)
+    with pytest.warns(UserWarning, match=r"stopped the arm at 1\.2\d s: .*IndexError: injected"):
+        summary = teach.teach_on_twin(lt.robots.yumi(), tmp_path / "t.mcap", duration=0.8,
+                                      friction_file=None)  # fmt: skip
+    assert "supervisor fault" in summary
+
+
+def test_damaged_recording_counts_the_taught_span_not_the_events(tmp_path):
+    """Events before the first sample (a calibration) do not lengthen the 'of … s' total."""
+    robot = lt.robots.yumi()
+    path = tmp_path / "session.mcap"
+    with SessionRecorder(path, robot, {"dt": DT}) as recorder:
+        recorder.event(0.0, "calibration", "started")
+        for k in range(PERIODS):
+            q = robot.home() + 0.1 * np.sin(k * DT)
+            recorder.record(0.9 + k * DT, q, 0 * q, 0 * q, 0 * q, 0 * q, "active", "teaching")
+    data = bytearray(path.read_bytes())
+    data[int(0.4 * len(data)) : int(0.4 * len(data)) + 200] = bytes(200)
+    (tmp_path / "damaged.mcap").write_bytes(bytes(data))
+    recovered = read_recording(tmp_path / "damaged.mcap")
+    assert f"of {(PERIODS - 1) * DT:.1f} s ({len(recovered.t)} of {PERIODS}" in recovered.recovery

@@ -219,6 +219,24 @@ def test_replay_is_supervised_in_holding_mode(dyn):
     assert np.all(np.isfinite(tau)) and np.all(np.abs(tau) <= ROBOT.torque_limits)
 
 
+def test_an_exception_in_the_replay_is_named_and_the_arm_stopped_that_period(dyn, monkeypatch):
+    """An IndexError in the tracker: fault naming it and its place, the safe stop at once."""
+    t, q = taught_path()
+    replayer = Replayer(plan_replay(t, q, dyn), dyn, dt=DT)
+    replayer.step(q[0], np.zeros(N))
+
+    def broken(*args, **kwargs):
+        raise IndexError("index 9 is out of bounds for axis 0 with size 7")
+
+    monkeypatch.setattr(replayer.tracker, "torque", broken)
+    tau = replayer.step(q[0], np.zeros(N))
+    reason = replayer.supervisor.fault_reason
+    assert replayer.supervisor.state is SupervisorState.FAULT
+    assert reason.startswith("replay failed: IndexError: index 9 is out of bounds")
+    assert "(at control/replay.py:" in reason and "in _desired)" in reason
+    np.testing.assert_allclose(tau, dyn.gravity(q[0]), atol=1e-9)  # at rest: the gravity hold
+
+
 def test_replay_errors_are_zero_on_the_plan_and_exact_for_an_offset(dyn):
     """The plan itself scores 0; a 1 mrad offset on one joint scores 1 mrad / √n RMS."""
     t, q = taught_path()

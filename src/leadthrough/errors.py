@@ -81,3 +81,23 @@ class ReplayError(LeadthroughError, ValueError):
         self.joint = joint
         self.suggested_time_scale = suggested_time_scale
         super().__init__(reason)
+
+
+def failure(stage: str, error: BaseException) -> str:
+    """One line for a fault: the stage that failed, the exception, where in the package.
+
+    ``"observer failed: IndexError: … (at estimation/observer.py:120 in update)"``: the
+    innermost frame of the traceback inside this package names the place.
+    """
+    import traceback
+    from pathlib import Path
+
+    package = Path(__file__).resolve().parent
+    inside = [frame for frame in traceback.extract_tb(error.__traceback__)
+              if Path(frame.filename).resolve().is_relative_to(package)]  # fmt: skip
+    where = ""
+    if inside:
+        frame = inside[-1]
+        module = Path(frame.filename).resolve().relative_to(package).as_posix()
+        where = f" (at {module}:{frame.lineno} in {frame.name})"
+    return f"{stage} failed: {type(error).__name__}: {error}{where}"

@@ -22,7 +22,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import NoReturn
 
-from leadthrough.experiments.teach import MAX_SECONDS, TIME_SCALE_RANGE
+from leadthrough.experiments.bounds import MAX_SECONDS, TIME_SCALE_RANGE
 
 #: Seeds are NumPy seeds: integers in [0, MAX_SEED].
 MAX_SEED = 2**32 - 1

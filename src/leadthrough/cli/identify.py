@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -59,6 +60,9 @@ def identify(
         save_logs(study.logs, save_log)
     study.model.save(out / "friction.toml")
     summary = summarise(study, out)
+    missing = _not_identified(study)
+    if missing:
+        warnings.warn(missing, stacklevel=2)
     (out / "identification.txt").write_text(summary + "\n", encoding="utf-8")
     _figures(study, out)
     return summary
@@ -111,17 +115,40 @@ def summarise(study: FrictionStudy, out: Path) -> str:
             f"{model.position_linear[j]:>8.3f}{model.position_quadratic[j]:>8.3f}"
         )
     lines += ["", str(study.report)]
+    missing = _not_identified(study)
+    if missing:
+        lines += ["", missing]
     errors = study.errors()
     if errors is not None:
         coulomb, viscous = errors
         lines += [
             "",
             "against the twin's true sliding friction (mid-range):",
-            "  τ_C error [%]: " + " ".join(f"{100 * coulomb[j]:+.2f}" for j in joints),
-            "  c error [%]:   " + " ".join(f"{100 * viscous[j]:+.2f}" for j in joints),
+            "  τ_C error [%]: " + " ".join(_percent(coulomb[j]) for j in joints),
+            "  c error [%]:   " + " ".join(_percent(viscous[j]) for j in joints),
         ]
+        if not np.all(np.isfinite(np.concatenate([coulomb[list(joints)], viscous[list(joints)]]))):
+            lines.append("  (–: the twin's true value is 0, no relative error)")
     lines.append(f"parameters: {out / 'friction.toml'}")
     return "\n".join(lines)
+
+
+def _percent(error: float) -> str:
+    """A relative error in %, signed; "–" when it has none (the true value is 0)."""
+    return f"{100 * error:+.2f}" if np.isfinite(error) else "–"
+
+
+def _not_identified(study: FrictionStudy) -> str:
+    """One line naming the joints not identified (1-based), or "" when every one was."""
+    joints = study.report.not_identified()
+    if not joints:
+        return ""
+    names = ", ".join(str(j + 1) for j in joints)
+    return (
+        f"joint{'s' if len(joints) > 1 else ''} {names} not identified (not asked for, or "
+        f"never moved in the logs): friction.toml keeps the robot file's nominal friction "
+        f"for {'them' if len(joints) > 1 else 'it'}"
+    )
 
 
 def _figures(study: FrictionStudy, out: Path) -> None:

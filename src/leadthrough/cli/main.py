@@ -92,12 +92,14 @@ def _identify(args: argparse.Namespace) -> int:
 _EPILOG_DEMO = """examples:
   leadthrough demo                 # identify, teach (recorded), replay, report in out/demo
   leadthrough demo --out /tmp/demo
+  leadthrough demo --robot panda --out out/demo-panda   # shipped: yumi, panda, ur5, ur10e
 """
 
 _EPILOG_TEACH = """examples:
   leadthrough teach                  # a hand teaches a line, recorded to out/taught.mcap
   leadthrough teach --path circle --mode passive --out circle.mcap
   leadthrough teach --friction out/friction/friction.toml --duration 8
+  leadthrough teach --robot ur5 --out ur5.mcap   # then: leadthrough replay ur5.mcap
 """
 
 _EPILOG_REPLAY = """examples:
@@ -227,7 +229,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     identify.set_defaults(run=_identify)
     demo = _add(commands, "demo", "the main job: teach, record and replay on the twin",
-                "Identify the twin's friction, let a simulated operator teach the YuMi a path with"
+                "Identify the twin's friction, let a simulated operator teach the arm (default: the"
+                " YuMi) a path with"
                 " active lead-through (recorded), replay it, and write a report with figures.",
                 _EPILOG_DEMO, _demo)  # fmt: skip
     _add_robot_arguments(demo)

@@ -26,9 +26,7 @@ the component, and the safe stop is sent in the same period.
 
 from __future__ import annotations
 
-import traceback
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -47,7 +45,7 @@ from leadthrough.control.calibration import Calibration, CalibrationRun
 from leadthrough.control.constraints import VirtualConstraint, constraint_torque
 from leadthrough.control.feedforward import DelayLine, FeedForwardTorques, PassiveFeedForward
 from leadthrough.control.parameters import LeadThroughParameters, Mode
-from leadthrough.errors import ParameterError
+from leadthrough.errors import ParameterError, failure
 from leadthrough.estimation.observer import MomentumObserver
 from leadthrough.estimation.wrench import ToolWrench, tool_wrench
 from leadthrough.friction.model import FrictionModel
@@ -57,9 +55,6 @@ from leadthrough.model.dynamics import Dynamics
 from leadthrough.model.snapshot import ModelSnapshot
 from leadthrough.safety.supervisor import SafetySupervisor, SupervisorState
 from leadthrough.validation import real
-
-#: Folder of the package: a failure names the innermost frame inside it.
-_PACKAGE = Path(__file__).resolve().parents[1]
 
 
 class LeadThrough:
@@ -275,7 +270,7 @@ class LeadThrough:
             self._stage = "supervisor"
             command = supervisor.command(t, q, qd, desired, model)
         except Exception as error:  # the safe stop this period, and the fault says what failed
-            supervisor.stop(self._failure(error), t)
+            supervisor.stop(failure(self._stage, error), t)
             command, dither = supervisor.command(t, q, qd, zeros), zeros
         return self._send(command, dither)
 
@@ -288,17 +283,6 @@ class LeadThrough:
         sample = joint_state(state, qd, tau, self._own_clock)
         self._t = float(sample.t)
         return self._t, sample.q, sample.qd, sample.tau_measured
-
-    def _failure(self, error: Exception) -> str:
-        """One line: the component that failed, the exception, where in the package."""
-        inside = [frame for frame in traceback.extract_tb(error.__traceback__)
-                  if Path(frame.filename).resolve().is_relative_to(_PACKAGE)]  # fmt: skip
-        where = ""
-        if inside:
-            frame = inside[-1]
-            module = Path(frame.filename).resolve().relative_to(_PACKAGE).as_posix()
-            where = f" (at {module}:{frame.lineno} in {frame.name})"
-        return f"{self._stage} failed: {type(error).__name__}: {error}{where}"
 
     def _send(self, command: FloatArray, dither: FloatArray) -> FloatArray:
         self._sent.push((command, dither))

@@ -17,7 +17,7 @@ from numpy.polynomial import polynomial
 from numpy.typing import ArrayLike
 
 from leadthrough.control.tracking import JointTracker
-from leadthrough.errors import ParameterError, ReplayError
+from leadthrough.errors import ParameterError, ReplayError, failure
 from leadthrough.friction.model import FrictionModel
 from leadthrough.logs.sample import JointState, joint_state
 from leadthrough.model.description import FloatArray, RobotDescription
@@ -356,7 +356,7 @@ class Replayer:
             model = self.dynamics.snapshot(q, qd)
             desired = self._desired(model)
         except Exception as error:  # the safe stop this period, and the fault says what failed
-            supervisor.stop(f"replay failed: {type(error).__name__}: {error}", t)
+            supervisor.stop(failure("replay", error), t)
             return supervisor.command(t, q, qd, zeros)
         return supervisor.command(t, q, qd, desired, model)
 

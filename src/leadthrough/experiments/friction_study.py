@@ -52,12 +52,16 @@ class FrictionStudy:
     robot: RobotDescription
 
     def errors(self) -> tuple[FloatArray, FloatArray] | None:
-        """Relative errors of the identified Coulomb level (mid-range) and viscous coefficient."""
+        """Relative errors of the identified Coulomb level (mid-range) and viscous coefficient.
+
+        NaN where the true value is 0 (e.g. a twin without viscous friction on a joint).
+        """
         if self.truth is None:
             return None
         coulomb, viscous = self.truth
         mid = 0.5 * (self.robot.q_min + self.robot.q_max)
-        return self.model.coulomb_level(mid) / coulomb - 1.0, self.model.viscous / viscous - 1.0
+        with np.errstate(divide="ignore", invalid="ignore"):  # a true value of 0: NaN
+            return self.model.coulomb_level(mid) / coulomb - 1.0, self.model.viscous / viscous - 1.0
 
     def joint_samples(self, joint: int) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(q, q̇, τ_f) of the logs in which ``joint`` moved, for that joint."""

@@ -21,6 +21,7 @@ import numpy as np
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.control.replay import Replayer, plan_replay, replay_errors
 from leadthrough.errors import ParameterError, RecordingError
+from leadthrough.experiments.bounds import MAX_SECONDS, TIME_SCALE_RANGE
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
@@ -33,11 +34,6 @@ from leadthrough.twin.runner import SimulationResult, simulate
 from leadthrough.twin.scenarios import scenario
 from leadthrough.twin.simulator import DigitalTwin
 from leadthrough.validation import real
-
-#: Longest simulated session or replay [s] (results take about 0.3 MB per simulated second).
-MAX_SECONDS = 600.0
-#: Bounds of a replay's time scale, replay duration over taught duration [–].
-TIME_SCALE_RANGE = (0.05, 20.0)
 
 
 class UnidentifiedFrictionWarning(UserWarning):
@@ -126,7 +122,12 @@ def teach_on_twin(
         events = controller.supervisor.events
         why = events[-1].detail if events else "the session ended before the calibration did"
         raise RecordingError(str(out), f"nothing was taught or recorded ({why})")
-    force = sim.operator_force
+    force, supervisor = sim.operator_force, controller.supervisor
+    if supervisor.fault_reason is not None:  # the arm was held from then on: say so
+        faults = [event for event in supervisor.events if event.kind == "fault"]
+        when = f" at {faults[0].t:.2f} s" if faults else ""
+        warnings.warn(f"the supervisor stopped the arm{when}: {supervisor.fault_reason}; the "
+                      f"recording holds the safe stop from then on", stacklevel=2)  # fmt: skip
     return (f"taught '{path}' in {mode} mode: {recording.recorded} samples, operator force RMS "
             f"{np.sqrt(np.mean(force**2)):.2f} N (peak {force.max():.1f} N), supervisor "
             f"{controller.state.value}\nrecording: {out}")  # fmt: skip

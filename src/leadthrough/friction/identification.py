@@ -84,6 +84,10 @@ class FitReport:
     position_fitted: np.ndarray
     joints: tuple[int, ...]
 
+    def not_identified(self) -> tuple[int, ...]:
+        """Joints (0-based) not identified: their model values are the prior's."""
+        return tuple(j for j in range(len(self.samples)) if j not in self.joints)
+
     def __str__(self) -> str:
         lines = [f"{'joint':>5}{'samples':>9}{'RMS [Nm]':>10}{'±τ_C':>9}{'±c':>9}{'position':>10}"]
         for j in self.joints:
@@ -130,13 +134,16 @@ def identify_friction(
             slid for at least ``settings.minimum_samples`` samples; a joint that only
             twitched is left at the prior rather than failing the whole fit).
         settings: Thresholds of the fit.
-        prior: Values kept for joints not identified (default: the description's).
+        prior: Values kept for joints not identified (default: the description's);
+            ``report.joints`` names the joints identified, :meth:`FitReport.not_identified`
+            the others.
 
     Returns:
         The identified model and its fit report.
 
     Raises:
-        IdentificationError: A log is malformed, or a requested joint never moved.
+        IdentificationError: A log is malformed, no joint moved, or a requested joint
+            never moved.
     """
     settings = settings or IdentificationSettings()
     samples = friction_samples(logs, dynamics, settings)
@@ -153,6 +160,9 @@ def fit_friction(
     """The fit of :func:`identify_friction`, on samples from :func:`friction_samples`."""
     settings = settings or IdentificationSettings()
     moved = np.flatnonzero(samples.moved.any(axis=0))
+    if moved.size == 0:  # nothing to fit: the prior must not come back as a result
+        raise IdentificationError(f"no joint moved faster than {settings.moving_velocity:g} "
+                                  f"rad/s in any log: nothing to identify")  # fmt: skip
     if joints is None:
         joints = tuple(int(j) for j in moved if _sliding_count(samples, int(j), settings)
                        >= settings.minimum_samples)  # fmt: skip

@@ -145,8 +145,10 @@ class FrictionModel:
 
     def coulomb_level(self, q: ArrayLike | None = None) -> FloatArray:
         """Coulomb level τ_C(q) [Nm], (..., n); ``q=None`` gives the mid-range level."""
-        if q is None or not self._position_dependent:
+        if q is None or (not self._position_dependent and np.ndim(q) <= 1):
             return self.coulomb
+        if not self._position_dependent:  # a batch of poses: one row each, like the others
+            return np.broadcast_to(self.coulomb, np.shape(q)).copy()
         u = (np.asarray(q, dtype=float) - self.position_mid) / self.position_half_range
         u = np.clip(u, -1.0, 1.0)  # hold the end values beyond the span: never extrapolate
         return self.coulomb * (1.0 + self.position_linear * u + self.position_quadratic * u * u)

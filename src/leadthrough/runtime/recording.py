@@ -348,7 +348,9 @@ def _recovery(recording: Recording, records: list[Any], readable: int, size: int
         return (f"recovered {seconds:.1f} s ({periods} periods): the file ends at byte {size}"
                 " without its summary (an unfinished or cut recording; how much is missing is "
                 "unknown)")  # fmt: skip
-    span = (statistics.message_end_time - statistics.message_start_time) * 1e-9
+    # the joint states' span: the summary's message times include the events too (one at
+    # t = 0 before a calibration that is not recorded), so count periods at the median rate
+    span = float(np.median(np.diff(recording.t))) * (total - 1) if periods > 1 else float("nan")
     return (f"recovered {seconds:.1f} s of {span:.1f} s ({periods} of {total} periods): the "
             f"file is damaged from byte {readable} of {size}")  # fmt: skip
 

@@ -31,7 +31,7 @@ from enum import StrEnum
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from leadthrough.errors import ParameterError
+from leadthrough.errors import ParameterError, failure
 from leadthrough.model.description import FloatArray
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.model.snapshot import ModelSnapshot
@@ -179,7 +179,7 @@ class SafetySupervisor:
             problem = self._sample_problem(position, velocity, tau)
             problem = problem or self._encoders.update(position, velocity)
         except Exception as error:  # nothing may escape on the motor path
-            problem = f"sensor check failed: {type(error).__name__}: {error}"
+            problem = failure("sensor check", error)
         if problem is not None:
             self._fault(problem)
             return False
@@ -214,7 +214,7 @@ class SafetySupervisor:
                 if tau is not None:
                     return tau
         except Exception as error:  # nothing may escape on the motor path
-            self._fault(f"command failed: {type(error).__name__}: {error}")
+            self._fault(failure("command", error))
         return self._safe_stop(qd)
 
     def record_cycle(self, t: float, duration: float) -> None:

@@ -34,7 +34,7 @@ def run_scenario(
     figure.savefig(out / f"{chosen.name}.png", dpi=120)
     lines = [
         f"scenario {chosen.name}: {chosen.description}",
-        f"  simulated {duration:.2f} s in {wall:.2f} s ({duration / wall:.0f}× real time)",
+        f"  simulated {duration:.2f} s in {wall:.2f} s ({duration / wall:.2g}× real time)",
         f"  largest hand force {result.operator_force.max():.1f} N, "
         f"tool travel {np.ptp(result.flange_position, axis=0).max() * 1000:.0f} mm",
         f"  largest true external torque {np.abs(result.tau_ext).max():.2f} Nm",
