@@ -122,3 +122,32 @@ def test_bad_loop_settings_are_refused(name, value):
     """A negative duration or a NaN stop time names the setting."""
     with pytest.raises(ParameterError, match=name):
         lt.control_loop(ClosableTwin(ROBOT), controller(), **{name: value})
+
+
+class _InterruptedAt:
+    """A passive controller whose ``count``-th step is a Ctrl-C."""
+
+    def __init__(self, robot: lt.RobotDescription, count: int) -> None:
+        self.controller = lt.LeadThrough(robot, "passive")
+        self.dt, self.supervisor = self.controller.dt, self.controller.supervisor
+        self.count = count
+
+    def step(self, state):
+        self.count -= 1
+        if self.count == 0:
+            raise KeyboardInterrupt
+        return self.controller.step(state)
+
+
+def test_ctrl_c_in_a_simulation_stops_the_arm_then_is_raised():
+    """A simulated run cut by Ctrl-C: the safe stop first, then the interruption goes on.
+
+    A partial simulation is no result (the command line then prints one line); a robot's
+    loop instead returns its report (``interrupted``), and teaching keeps its recording.
+    """
+    from leadthrough.twin.runner import simulate
+
+    controller = _InterruptedAt(ROBOT, 10)
+    with pytest.raises(KeyboardInterrupt, match=r"stopped at 0\.04 s of 1 s"):
+        simulate(DigitalTwin(ROBOT), controller, 1.0)
+    assert any("Ctrl-C" in event.detail for event in controller.supervisor.events)

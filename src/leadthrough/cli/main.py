@@ -305,16 +305,19 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     Ctrl-C prints one line and returns 130; a closed stdout (``| head``) ends quietly with 0.
     """
-    from leadthrough.twin.render import prefer_offscreen_gl
-
-    prefer_offscreen_gl()  # the commands that draw the arm render offscreen
-    parser = build_parser()
     try:
+        from leadthrough.twin.render import prefer_offscreen_gl
+
+        prefer_offscreen_gl()  # the commands that draw the arm render offscreen
+        parser = build_parser()
         args = parser.parse_args(argv)
         if args.command == "teach":
             arg.refuse_overwrite(args.out, args.force)
     except SystemExit as exit:  # --help (0) or a one-line argument error (2)
         return exit.code if isinstance(exit.code, int) else 2
+    except KeyboardInterrupt:  # while the commands' modules load: nothing was done yet
+        print("leadthrough: interrupted while starting: nothing was done", file=sys.stderr)
+        return 130
     try:
         with arg.one_line_warnings():
             return args.run(args)

@@ -82,6 +82,11 @@ class LoopReport:
     period: float
     ended: str
 
+    @property
+    def interrupted(self) -> bool:
+        """Whether the operator stopped the loop (Ctrl-C) before it ended by itself."""
+        return self.ended == OPERATOR_STOP
+
     def summary(self) -> str:
         """One line: periods, compute times against the period, overruns, how it ended."""
         return (f"{self.periods} periods of {1e3 * self.period:g} ms: compute median "
@@ -189,9 +194,13 @@ def stepper(controller: Any) -> Callable[[JointState], FloatArray]:
     return lambda state: step(state.q, state.qd, state.tau_measured)
 
 
+#: :attr:`LoopReport.ended` when the operator pressed Ctrl-C.
+OPERATOR_STOP = "interrupted by the operator (Ctrl-C)"
+
+
 def _interruption(error: BaseException) -> str:
     if isinstance(error, KeyboardInterrupt):
-        return "interrupted by the operator (Ctrl-C)"
+        return OPERATOR_STOP
     return f"interrupted by an error: {type(error).__name__}: {error}"
 
 

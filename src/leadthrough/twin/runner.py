@@ -86,7 +86,8 @@ def simulate(
     with the twin as a driver without a wall clock: each period the controller gets the
     twin's sample (its clock included), its command is sent, the twin simulates the
     period; compute time is measured but not held against the period. An error brings
-    the controller's safe stop and is raised again. ``progress`` shows a bar (default:
+    the controller's safe stop and is raised again, and so does Ctrl-C (after the safe
+    stop: a partial run is no result). ``progress`` shows a bar (default:
     when stderr is a terminal and the run is longer than 10 s).
     """
     log: dict[str, list] = {field.name: [] for field in fields(SimulationResult)}
@@ -100,9 +101,13 @@ def simulate(
         bar.update(state.t - start)
 
     try:
-        control_loop(observed, controller, duration, after_period=record, wall_clock=False)
+        report = control_loop(observed, controller, duration, after_period=record,
+                              wall_clock=False)  # fmt: skip
     finally:
         bar.close()
+    if report.interrupted:  # the arm was stopped safely; a partial run is no result
+        simulated = report.periods * report.period
+        raise KeyboardInterrupt(f"the simulation stopped at {simulated:.2f} s of {duration:g} s")
     return SimulationResult(**{name: np.array(values) for name, values in log.items()})
 
 
