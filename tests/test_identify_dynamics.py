@@ -112,8 +112,21 @@ def test_log_without_torque_is_one_clear_error(nominal):
     """A log with no torque is refused with a message naming it."""
     log = lt.JointLog(t=np.arange(50) * 0.01, q=np.zeros((50, 6)), qd=np.zeros((50, 6)),
                       source="run.csv")  # fmt: skip
-    with pytest.raises(DynamicsIdentificationError, match=r"run\.csv: no torque"):
+    with pytest.raises(DynamicsIdentificationError, match=r"run\.csv: no joint torque"):
         lt.identify_dynamics(log, nominal)
+
+
+def test_a_current_log_is_torque_through_the_robots_constants(synthetic, nominal):
+    """A log of motor currents (read without the robot) identifies as its K·i torque log."""
+    log = synthetic[1]  # the held-out log, as torques
+    constants = nominal.torque_constants
+    assert constants is not None  # the UR10e carries K [Nm/A]
+    as_current = lt.JointLog(t=log.t, q=log.q, qd=log.qd, current=log.tau / constants)
+    from_current, _ = lt.identify_dynamics(as_current, nominal)
+    from_torque, _ = lt.identify_dynamics(log, nominal)
+    q = nominal.home() + 0.3
+    expected = lt.Dynamics(from_torque).gravity(q)
+    np.testing.assert_allclose(lt.Dynamics(from_current).gravity(q), expected, atol=1e-9)
 
 
 @needs_realdata

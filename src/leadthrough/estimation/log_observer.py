@@ -123,15 +123,13 @@ def measured_torque(log: JointLog, robot: RobotDescription) -> FloatArray:
     if log.n_joints != robot.n_joints:
         raise LogInputError(f"{where}: {log.n_joints} joints, but {robot.name} has "
                             f"{robot.n_joints}")  # fmt: skip
-    if log.tau is not None:
-        return np.asarray(log.tau, dtype=float)
-    constants = robot.torque_constants
+    torque = log.joint_torque(robot.torque_constants)
+    if torque is not None:
+        return torque
     if log.current is None:
         raise LogInputError(f"{where}: the log has neither joint torques nor motor currents")
-    if constants is None:
-        raise LogInputError(f"{where}: the log has motor currents but {robot.name} has "
-                            "no torque constants (Joint.torque_constant) for τ = K·i")  # fmt: skip
-    return np.asarray(log.current, dtype=float) * constants
+    raise LogInputError(f"{where}: the log has motor currents but {robot.name} has "
+                        "no torque constants (Joint.torque_constant) for τ = K·i")  # fmt: skip
 
 
 def resample(log: JointLog, torque: FloatArray) -> tuple[FloatArray, ...]:

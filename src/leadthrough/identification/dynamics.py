@@ -134,7 +134,7 @@ def identify_dynamics(
     """
     settings = settings or DynamicsSettings()
     friction = friction or FrictionModel.from_robot(robot)
-    q, qd, qdd, tau = _stacked_samples(logs, robot.n_joints, settings)
+    q, qd, qdd, tau = _stacked_samples(logs, robot, settings)
     n = robot.n_joints
     rows = regressor_rows(robot, friction, q, qd, qdd)
     measured = tau.reshape(-1)
@@ -160,31 +160,40 @@ def identify_dynamics(
     return identified, report
 
 
-def smoothed_signals(log: Any, bandwidth: float) -> tuple[FloatArray, ...]:
+def smoothed_signals(
+    log: Any, bandwidth: float, tau: FloatArray | None = None
+) -> tuple[FloatArray, ...]:
     """(q, q̇, q̈, τ) of a log: q̇ smoothed and q̈ its zero-phase derivative [SI].
 
-    τ stays raw: its noise is white and averages out in the regression, while smoothing
-    would smear the Coulomb step at each reversal that the friction model keeps sharp.
+    τ (default ``log.tau``) stays raw: its noise is white and averages out in the
+    regression, while smoothing would smear the Coulomb step at each reversal that the
+    friction model keeps sharp.
     """
     t = np.asarray(log.t, dtype=float)
     qd, qdd = smooth_derivative(t, log.qd, bandwidth)
-    return np.asarray(log.q, dtype=float), qd, qdd, np.asarray(log.tau, dtype=float)
+    torque = np.asarray(log.tau if tau is None else tau, dtype=float)
+    return np.asarray(log.q, dtype=float), qd, qdd, torque
 
 
-def _stacked_samples(logs: Any, n: int, settings: DynamicsSettings) -> tuple[FloatArray, ...]:
+def _stacked_samples(
+    logs: Any, robot: RobotDescription, settings: DynamicsSettings
+) -> tuple[FloatArray, ...]:
     logs = [logs] if hasattr(logs, "t") else list(logs)
     if not logs:
         raise DynamicsIdentificationError("no logs given")
-    parts = []
+    n, parts = robot.n_joints, []
     for index, log in enumerate(logs):
         where = getattr(log, "source", "") or f"log {index}"
-        if getattr(log, "tau", None) is None:
-            raise DynamicsIdentificationError(f"{where}: no torque (give the robot's torque "
-                                              "constants when reading current logs)")  # fmt: skip
         if log.q.shape[1] != n or len(log.t) < 20:
             shape = f"{log.q.shape[1]} joints and {len(log.t)} samples"
             raise DynamicsIdentificationError(f"{where}: {shape}, expected {n} and ≥ 20")
-        parts.append(smoothed_signals(log, settings.bandwidth))
+        tau = log.joint_torque(robot.torque_constants) if hasattr(log, "joint_torque") else (
+            getattr(log, "tau", None))  # fmt: skip
+        if tau is None:
+            raise DynamicsIdentificationError(f"{where}: no joint torque, and no motor "
+                                              f"currents with {robot.name}'s torque "
+                                              "constants (Joint.torque_constant)")  # fmt: skip
+        parts.append(smoothed_signals(log, settings.bandwidth, tau))
     stacked = [np.concatenate(arrays) for arrays in zip(*parts, strict=True)]
     stride = max(1, int(np.ceil(len(stacked[0]) / settings.max_samples)))
     return tuple(array[::stride] for array in stacked)

@@ -82,3 +82,18 @@ class JointLog:
     def median_period(self) -> float:
         """Median sample period [s] (the log's nominal rate is its inverse)."""
         return float(np.median(np.diff(self.t))) if self.t.size > 1 else float("nan")
+
+    def joint_torque(self, torque_constants: NDArray[np.float64] | None) -> FloatArray | None:
+        """Arm-side joint torque [Nm], (N, n): ``tau``, else K·i from the motor currents.
+
+        Args:
+            torque_constants: The robot's K per joint [Nm/A] (``robot.torque_constants``).
+
+        Returns:
+            None when the log has neither, or only currents and no constants are given.
+        """
+        if self.tau is not None:
+            return np.asarray(self.tau, dtype=float)
+        if self.current is None or torque_constants is None:
+            return None
+        return np.asarray(self.current, dtype=float) * np.asarray(torque_constants, dtype=float)
