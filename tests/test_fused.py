@@ -1,4 +1,4 @@
-"""The compiled active law (control/fused.py) equals the readable NumPy code of LeadThrough."""
+"""Compiled active law (control/fused.py), dither and compensation equal their NumPy code."""
 
 from __future__ import annotations
 
@@ -8,8 +8,10 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
+from leadthrough.control.dither import Dither, DitherParameters
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.control.parameters import LeadThroughParameters
+from leadthrough.friction.compensation import CoulombCompensation
 from test_speed_reference import CASES
 
 PERIODS = 20000
@@ -77,11 +79,7 @@ def _law_run(robot: lt.RobotDescription, parameters: LeadThroughParameters, fric
 def test_compiled_law_equals_the_numpy_reference_over_random_periods(robot_name, changes, cable):
     """20 000 periods of drive, bias, weights, references and PD torque: equal to 1e-12."""
     robot = getattr(lt.robots, robot_name)()
-    friction = lt.FrictionModel.from_robot(robot)
-    if cable:
-        n = robot.n_joints
-        friction = replace(friction, position_linear=np.full(n, 0.1),
-                           position_quadratic=np.full(n, 0.05))  # fmt: skip
+    friction = _cable(robot) if cable else lt.FrictionModel.from_robot(robot)
     parameters = LeadThroughParameters(**changes)
     compiled = _law_run(robot, parameters, friction, compiled=True)
     reference = _law_run(robot, parameters, friction, compiled=False)
@@ -114,9 +112,65 @@ def test_a_nan_estimate_propagates_as_in_numpy():
                                equal_nan=True)  # fmt: skip
 
 
+def _cable(robot: lt.RobotDescription) -> lt.FrictionModel:
+    """The description's friction with a position-dependent Coulomb level."""
+    n = robot.n_joints
+    return replace(lt.FrictionModel.from_robot(robot), position_linear=np.full(n, 0.1),
+                   position_quadratic=np.full(n, 0.05))  # fmt: skip
+
+
+def _velocities(rng: np.random.Generator, k: int, n: int) -> np.ndarray:
+    """Joint speeds of period ``k``: all at rest (long enough to park), some, or none."""
+    phase = (k // 700) % 4
+    if phase == 0:
+        return rng.normal(0.0, 1e-3, n)
+    moving = np.random.default_rng(k // 100).random(n) < (0.2, 0.5, 1.0)[phase - 1]  # 0.4 s
+    return np.where(moving, rng.normal(0.0, 0.02, n), rng.normal(0.0, 1e-3, n))
+
+
+@pytest.mark.parametrize("park_time, clock", [(2.0, True), (None, True), (0.5, False)])
+def test_compiled_dither_equals_the_numpy_reference(park_time, clock):
+    """10 000 periods (rest, park, joints starting and stopping): same torque, same state."""
+    robot = lt.robots.yumi()
+    parameters = DitherParameters(park_time=park_time)
+    runs = []
+    for compiled in (True, False):
+        rng = np.random.default_rng(21)
+        dither = Dither(_cable(robot), 0.004, parameters)
+        dither.compiled = compiled
+        rows = []
+        for k in range(10000):
+            q = robot.home() + rng.normal(0.0, 0.5, 7)
+            torque = dither.step(_velocities(rng, k, 7), q, 1.7e9 + 0.004 * k if clock else None)
+            rows.append(np.concatenate([torque, dither.active, [dither.parked]]))
+        runs.append(np.array(rows))
+    assert 0.05 < np.mean(runs[1][:, 7:14]) < 0.95  # both decisions are taken
+    assert runs[1][:, -1].any() == (park_time is not None)
+    np.testing.assert_allclose(runs[0], runs[1], rtol=1e-12, atol=1e-12)
+
+
+def test_compiled_compensation_equals_the_numpy_reference():
+    """20 000 periods around the dead-band and ramp, default and per-joint bands: 1e-12."""
+    robot = lt.robots.yumi()
+    runs = []
+    for compiled in (True, False):
+        rng = np.random.default_rng(22)
+        compensation = CoulombCompensation(_cable(robot), dt=0.004)
+        compensation.compiled = compiled
+        rows = []
+        for k in range(20000):
+            qd = rng.normal(0.0, (0.002, 0.006, 0.02, 1.0)[k % 4], 7)
+            band = None if k % 3 else rng.choice([0.003, 0.01, 0.02], 7)
+            q = robot.home() + rng.normal(0.0, 0.5, 7)
+            rows.append(compensation.step(qd, q, band))
+        runs.append(np.array(rows))
+    np.testing.assert_allclose(runs[0], runs[1], rtol=1e-12, atol=1e-12)
+
+
 @pytest.mark.parametrize("case", [name for name in CASES if not name.startswith("twin")])
 def test_steps_with_the_numpy_law_equal_the_compiled_one(case, monkeypatch):
     """Whole steps (modes, calibration, constraints, a fault, the Panda): equal to 1e-12."""
     compiled = CASES[case]()
-    monkeypatch.setattr(LeadThrough, "compiled", False)
+    for component in (LeadThrough, Dither, CoulombCompensation):
+        monkeypatch.setattr(component, "compiled", False)
     np.testing.assert_allclose(compiled, CASES[case](), rtol=1e-12, atol=1e-12, equal_nan=True)
