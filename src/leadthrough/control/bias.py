@@ -32,7 +32,8 @@ class ModelErrorBias:
         self.mass_uncertainty = mass_uncertainty
         self.bias = np.zeros(n_joints)
         self.confidence = 0.0  # 0: nothing learned, → 1 after a few learning times at rest
-        self._gravity_learned = np.zeros(n_joints)
+        #: G at the poses the bias was learned, weighted as it was learned [Nm]
+        self.gravity_learned = np.zeros(n_joints)
 
     def update(
         self,
@@ -59,14 +60,14 @@ class ModelErrorBias:
             rate = unguided * dt / self.learning_time
             # np.clip's result (NaN included) at half its cost
             self.bias = np.minimum(np.maximum(self.bias + rate * residual, -bound), bound)
-            self._gravity_learned = self._gravity_learned + rate * (gravity - self._gravity_learned)
+            self.gravity_learned = self.gravity_learned + rate * (gravity - self.gravity_learned)
             self.confidence += rate * (1.0 - self.confidence)
         return estimate - self.bias
 
     def calibrate(self, bias: FloatArray, gravity: FloatArray) -> None:
         """Take a bias measured by the start-up calibration at a pose where G = ``gravity``."""
         self.bias = np.array(bias, dtype=float)
-        self._gravity_learned = np.array(gravity, dtype=float)
+        self.gravity_learned = np.array(gravity, dtype=float)
         self.confidence = 1.0
 
     def tolerance(self, gravity: FloatArray) -> FloatArray:
@@ -76,6 +77,6 @@ class ModelErrorBias:
         the bias was learned after.
         """
         unknown = np.abs(gravity)
-        changed = np.abs(gravity - self._gravity_learned)
+        changed = np.abs(gravity - self.gravity_learned)
         gravity_error = (1.0 - self.confidence) * unknown + self.confidence * changed
         return self.mass_uncertainty * gravity_error

@@ -44,6 +44,7 @@ from leadthrough.control.bias import ModelErrorBias
 from leadthrough.control.calibration import Calibration, CalibrationRun
 from leadthrough.control.constraints import VirtualConstraint, constraint_torque
 from leadthrough.control.feedforward import DelayLine, FeedForwardTorques, PassiveFeedForward
+from leadthrough.control.fused import admittance_law, operator_drive
 from leadthrough.control.parameters import LeadThroughParameters, Mode
 from leadthrough.errors import ParameterError, failure
 from leadthrough.estimation.observer import MomentumObserver
@@ -82,6 +83,11 @@ class LeadThrough:
         ParameterError: A setting that does not fit the robot (one line naming it).
     """
 
+    #: Run the active law compiled (:mod:`leadthrough.control.fused`); False runs the
+    #: readable NumPy reference (:meth:`_update_drive`, :meth:`_admittance`), which the
+    #: tests compare it to.
+    compiled = True
+
     def __init__(
         self,
         robot: RobotDescription,
@@ -115,6 +121,12 @@ class LeadThrough:
         self.supervisor = SafetySupervisor(Dynamics(robot), dt, parameters.safety)
         self._reference_low = robot.q_min + parameters.limit_zone
         self._reference_high = robot.q_max - parameters.limit_zone
+        p = parameters  # the scalars of the compiled law (fused.DRIVE/ADMITTANCE_SCALARS)
+        self._drive_scalars = np.array([p.mass_uncertainty, self.dt, p.bias_time,
+                                        p.drive_gain_uncertainty, p.assist_knee])  # fmt: skip
+        self._admittance_scalars = np.array([float(p.limit_aware), p.reanchor_error,
+            p.damping_time, p.rest_damping, p.inertia_scale, self.dt,
+            (2.0 * np.pi * p.position_bandwidth) ** 2, p.velocity_time])  # fmt: skip
         self.reset()
 
     def _build(self, robot: RobotDescription, friction: FrictionModel) -> None:
@@ -135,6 +147,9 @@ class LeadThrough:
         self._friction_tolerance = relative * friction.coulomb + 2.0 * friction.noise_std
         self._rest_tolerance = p.stiction_margin * friction.coulomb + 2.0 * friction.noise_std
         self._speed_cap = p.assist_speed_fraction * robot.velocity_limits
+        self._joint_constants = np.array([self._friction_tolerance, self._reference_low,
+            self._reference_high, relative, self._viscous_relative, self._rest_tolerance,
+            self._speed_cap])  # fused.JOINT_ROWS  # fmt: skip
 
     # --- state a user may read ---------------------------------------------------------
 
@@ -211,6 +226,7 @@ class LeadThrough:
         self._weight = np.zeros(n)
         self._feedback = np.zeros(n)  # the admittance's last tracking torque [Nm]
         self._references: AdmittanceState | None = None
+        self._work = np.zeros((n, n + 1))  # the compiled admittance's scratch space
         self._sent = DelayLine((2, n), p.measurement_delay)  # (command, its dither) [Nm]
         self._own_clock = 0.0  # [s], for the positional form of step, which brings no time
         self._t = float("nan")
@@ -336,15 +352,40 @@ class LeadThrough:
         self._stage = "observer"
         estimate = self.observer.update(q, qd, applied - dither, model)
         self._stage = "operator torque"
-        self._update_drive(estimate, q, qd, model.gravity)
+        (self._compiled_drive if self.compiled else self._update_drive)(estimate, q, qd,
+                                                                         model.gravity)  # fmt: skip
         torque = feed_forward.total
         self._stage = "constraints"
         constraint, _ = constraint_torque(self.constraints, self.dynamics, q, qd, model)
         if self.mode == "passive":
             return torque + constraint, feed_forward.dither
         self._stage = "admittance"
-        active = self._admittance(q, qd, self._drive + constraint, model.mass)
+        if self.compiled:
+            active = self._compiled_admittance(q, qd, constraint, model.mass)
+        else:
+            active = self._admittance(q, qd, self._drive + constraint, model.mass)
         return torque + active, feed_forward.dither
+
+    def _compiled_drive(
+        self, estimate: FloatArray, q: FloatArray, qd: FloatArray, gravity: FloatArray
+    ) -> None:
+        """:meth:`_update_drive` in one compiled pass (:func:`fused.operator_drive`)."""
+        bias, (level, viscous, upper, lower) = self.model_error, self.friction.sigmoid_terms(qd, q)
+        bias.confidence = operator_drive(estimate, q, gravity, level, viscous, upper, lower,
+            self._joint_constants, self._drive_scalars, bias.bias, bias.gravity_learned,
+            bias.confidence, self._weight, self._drive, self._feedback)  # fmt: skip
+
+    def _compiled_admittance(
+        self, q: FloatArray, qd: FloatArray, constraint: FloatArray, mass: FloatArray
+    ) -> FloatArray:
+        """:meth:`_admittance` of drive + constraint, compiled (:func:`fused.admittance_law`)."""
+        if self._references is None:
+            self._references = AdmittanceState(q.copy(), qd.copy())
+        references = self._references
+        admittance_law(q, qd, self._drive, constraint, mass, self._weight, self._joint_constants,
+                       self._admittance_scalars, references.q_ref, references.qd_ref,
+                       self._feedback, self._work)  # fmt: skip
+        return self._feedback
 
     def _update_drive(
         self, estimate: FloatArray, q: FloatArray, qd: FloatArray, gravity: FloatArray

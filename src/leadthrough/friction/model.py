@@ -153,7 +153,7 @@ class FrictionModel:
         u = np.clip(u, -1.0, 1.0)  # hold the end values beyond the span: never extrapolate
         return self.coulomb * (1.0 + self.position_linear * u + self.position_quadratic * u * u)
 
-    def _sigmoid_terms(
+    def sigmoid_terms(
         self, qd: ArrayLike, q: ArrayLike | None
     ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """τ_C(q), c q̇ and tanh(A (q̇ ± B) / 2), the terms of every output below.
@@ -179,7 +179,7 @@ class FrictionModel:
 
     @cached_property
     def _last(self) -> list[tuple | None]:
-        """The latest (key, terms) of :meth:`_sigmoid_terms`, in a one-element list.
+        """The latest (key, terms) of :meth:`sigmoid_terms`, in a one-element list.
 
         A control period asks for the mean, the std and the uncertainty at the same
         (q̇, q): the observer, then the controller.
@@ -188,17 +188,17 @@ class FrictionModel:
 
     def bounds(self, qd: ArrayLike, q: ArrayLike | None = None) -> tuple[FloatArray, FloatArray]:
         """The sigmoid pair (τ_f,max, τ_f,min) of eqs. (4.2)–(4.3) [Nm], each (..., n)."""
-        level, viscous, upper, lower = self._sigmoid_terms(qd, q)
+        level, viscous, upper, lower = self.sigmoid_terms(qd, q)
         return level * upper + viscous, level * lower + viscous
 
     def mean(self, qd: ArrayLike, q: ArrayLike | None = None) -> FloatArray:
         """Mean friction torque, eq. (4.4) [Nm], (..., n), with the sign of q̇."""
-        level, viscous, upper, lower = self._sigmoid_terms(qd, q)
+        level, viscous, upper, lower = self.sigmoid_terms(qd, q)
         return 0.5 * level * (upper + lower) + viscous
 
     def coulomb_uncertainty(self, qd: ArrayLike, q: ArrayLike | None = None) -> FloatArray:
         """Coulomb uncertainty v_C, eq. (4.5) [Nm], (..., n): ≈ τ_C at rest, → 0 moving."""
-        level, _, upper, lower = self._sigmoid_terms(qd, q)
+        level, _, upper, lower = self.sigmoid_terms(qd, q)
         return 0.5 * level * (upper - lower)
 
     def std(self, qd: ArrayLike, q: ArrayLike | None = None) -> FloatArray:
@@ -209,7 +209,7 @@ class FrictionModel:
         self, qd: ArrayLike, q: ArrayLike | None = None
     ) -> tuple[FloatArray, FloatArray]:
         """:meth:`mean` and :meth:`std` in one evaluation (the observer's hot path)."""
-        level, viscous, upper, lower = self._sigmoid_terms(qd, q)
+        level, viscous, upper, lower = self.sigmoid_terms(qd, q)
         half_level = 0.5 * level
         return half_level * (upper + lower) + viscous, np.hypot(half_level * (upper - lower),
                                                                 self.noise_std)  # fmt: skip

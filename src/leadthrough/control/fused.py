@@ -1,0 +1,186 @@
+"""The active law of :class:`~leadthrough.control.lead_through.LeadThrough`, compiled.
+
+Two kernels do, per joint and in one pass, what the readable NumPy code of the controller
+does in some forty vector operations and a 7×7 solve (the reference, which the tests hold
+these to at 1e-12):
+
+* :func:`operator_drive` is ``LeadThrough._update_drive``: learn the model-error bias
+  (:class:`~leadthrough.control.bias.ModelErrorBias`), remove it through the dead-zone,
+  remove the friction the model may overstate, weigh the residual by the model's own
+  uncertainty (:func:`~leadthrough.control.admittance.operator_weight`);
+* :func:`admittance_law` is ``LeadThrough._admittance``: ignore an end-stop's reaction,
+  re-anchor lost references, integrate the admittance (:func:`~leadthrough.control.
+  admittance.admittance_step`, the (k_M M + dt D̃) system solved by Gaussian elimination
+  with partial pivoting), cap and bound the references, and the PD that tracks them.
+
+Both work in place on the controller's state (arrays preallocated once) and take its
+constants packed in one (7, n) array of per-joint rows and one array of scalars (see
+:data:`JOINT_ROWS`, :data:`DRIVE_SCALARS`, :data:`ADMITTANCE_SCALARS`): a call costs
+~1 µs of dispatch, not one per argument.
+"""
+
+from __future__ import annotations
+
+import math
+
+from leadthrough.compiled import kernel
+
+#: Rows of the per-joint constants: the friction tolerance 2σ + relative τ_C, the low and
+#: high reference limits, the Coulomb and viscous relative errors, the tolerance at rest
+#: and the speed cap of the references.
+JOINT_ROWS = ("friction_tolerance", "reference_low", "reference_high", "friction_relative",
+              "viscous_relative", "rest_tolerance", "speed_cap")  # fmt: skip
+#: Scalars of :func:`operator_drive`, in order.
+DRIVE_SCALARS = ("mass_uncertainty", "dt", "bias_time", "drive_gain_uncertainty",
+                 "assist_knee")  # fmt: skip
+#: Scalars of :func:`admittance_law`, in order (``limit_aware`` as 0/1, ``position_gain``
+#: is (2π f)² [1/s²]).
+ADMITTANCE_SCALARS = ("limit_aware", "reanchor_error", "damping_time", "rest_damping",
+                      "inertia_scale", "dt", "position_gain", "velocity_time")  # fmt: skip
+
+
+@kernel
+def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, scalars,
+                   bias, gravity_learned, confidence, weight, drive, feedback):  # fmt: skip
+    """One period of the operator torque, in place; returns the bias' new confidence.
+
+    Args:
+        estimate: Observer estimate τ̂_ext [Nm].
+        q: Joint positions [rad].
+        gravity: G(q) [Nm].
+        level: τ_C(q) [Nm] (the friction model's terms at (q̇, q),
+            ``FrictionModel.sigmoid_terms``, as are the next three).
+        viscous: c q̇ [Nm].
+        upper: tanh(A (q̇ + B) / 2) [–].
+        lower: tanh(A (q̇ − B) / 2) [–].
+        joint: Per-joint constants, rows :data:`JOINT_ROWS`.
+        scalars: :data:`DRIVE_SCALARS`.
+        bias: The learned bias [Nm] (``ModelErrorBias.bias``), updated.
+        gravity_learned: ``ModelErrorBias.gravity_learned`` [Nm], updated.
+        confidence: The bias' confidence [–].
+        weight: Operator weights [–], updated.
+        drive: Operator drive [Nm], written.
+        feedback: The admittance's last tracking torque [Nm].
+    """
+    mass_uncertainty, dt, bias_time, gain_uncertainty, knee = scalars
+    n = q.shape[0]
+    clear_of_limits, top, undefined = True, -math.inf, False
+    for i in range(n):
+        clear_of_limits = clear_of_limits and q[i] > joint[1, i] and q[i] < joint[2, i]
+        undefined = undefined or weight[i] != weight[i]
+        top = weight[i] if weight[i] > top else top
+    top = math.nan if undefined else top  # np.max: NaN wins
+    unguided = (1.0 - top) ** 2 if clear_of_limits else 0.0
+    if unguided > 0.0:  # NaN learns nothing, as in ModelErrorBias.update
+        rate = unguided * dt / bias_time
+        for i in range(n):
+            bound = 2.0 * (joint[0, i] + mass_uncertainty * abs(gravity[i]))
+            learned = bias[i] + rate * (estimate[i] - bias[i])
+            learned = learned if learned > -bound or learned != learned else -bound
+            bias[i] = learned if learned < bound or learned != learned else bound
+            gravity_learned[i] = gravity_learned[i] + rate * (gravity[i] - gravity_learned[i])
+        confidence += rate * (1.0 - confidence)
+    for i in range(n):
+        b = bias[i]
+        band_high = (b if b > 0.0 or b != b else 0.0) + 0.0
+        band_low = (b if b < 0.0 or b != b else 0.0) - 0.0
+        value = estimate[i]
+        if value > band_high:
+            residual = value - band_high
+        elif value < band_low:
+            residual = value - band_low
+        else:
+            residual = 0.0
+        half_level = 0.5 * level[i]
+        coulomb = (half_level * (upper[i] + lower[i]) + viscous[i]) - viscous[i]
+        margin = joint[3, i] * coulomb + joint[4, i] * viscous[i]
+        residual = (residual - margin) - gain_uncertainty * feedback[i]
+        unknown = abs(gravity[i])
+        changed = abs(gravity[i] - gravity_learned[i])
+        tolerance = mass_uncertainty * ((1.0 - confidence) * unknown + confidence * changed)
+        uncertainty = (joint[5, i] + tolerance) + half_level * (upper[i] - lower[i])
+        if knee == 0.0:
+            w = 1.0
+        else:
+            floor = uncertainty if uncertainty > 1e-12 or uncertainty != uncertainty else 1e-12
+            z = residual / (knee * floor)
+            z2 = z * z
+            w = z2 / (1.0 + z2)
+        weight[i] = w
+        drive[i] = residual * w
+    return confidence
+
+
+@kernel
+def admittance_law(q, qd, drive, constraint, mass, weight, joint, scalars, q_ref, qd_ref,
+                   feedback, work):  # fmt: skip
+    """One period of the admittance and its tracking PD, in place (``feedback`` [Nm]).
+
+    Args:
+        q: Joint positions [rad].
+        qd: Joint velocities [rad/s].
+        drive: Operator drive [Nm].
+        constraint: Virtual constraints' torque [Nm].
+        mass: M(q) [kg m²], (n, n).
+        weight: Operator weights [–].
+        joint: Per-joint constants, rows :data:`JOINT_ROWS`.
+        scalars: :data:`ADMITTANCE_SCALARS`.
+        q_ref: Position reference [rad], updated.
+        qd_ref: Velocity reference [rad/s], updated.
+        feedback: Tracking torque [Nm], written.
+        work: Scratch space, (n, n + 1).
+    """
+    limit_aware, reanchor, damping_time, rest, scale, dt, position_gain, velocity_time = scalars
+    n = q.shape[0]
+    for i in range(n):  # the reference system (k_M M + dt D̃) x = k_M M q̇_ref + dt τ_in
+        tau_in = drive[i] + constraint[i]
+        reaction = (q[i] > joint[2, i] and tau_in < 0) or (q[i] < joint[1, i] and tau_in > 0)
+        if limit_aware != 0.0 and reaction:  # near a limit, a push away is the stop's reaction
+            tau_in = 0.0
+        if abs(q_ref[i] - q[i]) > reanchor:  # tracking lost: re-anchor
+            q_ref[i], qd_ref[i] = q[i], qd[i]
+        work[i, n] = dt * tau_in
+    for i in range(n):
+        total = 0.0
+        for j in range(n):
+            virtual = scale * mass[i, j]
+            work[i, j] = virtual
+            total += virtual * qd_ref[j]
+        work[i, n] += total
+        damping = mass[i, i] / damping_time * (1.0 + rest) / (1.0 + rest * weight[i])
+        work[i, i] += dt * damping
+    # Gaussian elimination with partial pivoting of the augmented (n, n + 1) system
+    for k in range(n):
+        pivot, best = k, abs(work[k, k])
+        for i in range(k + 1, n):
+            if abs(work[i, k]) > best:
+                pivot, best = i, abs(work[i, k])
+        if pivot != k:
+            for j in range(k, n + 1):
+                work[k, j], work[pivot, j] = work[pivot, j], work[k, j]
+        for i in range(k + 1, n):
+            factor = work[i, k] / work[k, k]
+            for j in range(k + 1, n + 1):
+                work[i, j] -= factor * work[k, j]
+    for i in range(n - 1, -1, -1):
+        total = work[i, n]
+        for j in range(i + 1, n):
+            total -= work[i, j] * work[j, n]
+        work[i, n] = total / work[i, i]
+    for i in range(n):
+        velocity = work[i, n]
+        position = q_ref[i] + dt * velocity
+        cap = joint[6, i]
+        velocity = velocity if velocity > -cap or velocity != velocity else -cap
+        velocity = velocity if velocity < cap or velocity != velocity else cap
+        if limit_aware != 0.0:  # hold a joint where it is inside the limit zone
+            low = joint[1, i] if joint[1, i] < q[i] else q[i]
+            high = joint[2, i] if joint[2, i] > q[i] else q[i]
+            position = position if position > low or position != position else low
+            position = position if position < high or position != position else high
+            if (position <= low and velocity < 0) or (position >= high and velocity > 0):
+                velocity = 0.0
+        q_ref[i], qd_ref[i] = position, velocity
+        inertia = mass[i, i]
+        kp, kd = inertia * position_gain, inertia / velocity_time
+        feedback[i] = kp * (position - q[i]) + kd * (velocity - qd[i])

@@ -1,0 +1,176 @@
+"""Compiled active law (control/fused.py), dither and compensation equal their NumPy code."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import leadthrough as lt
+from leadthrough.control.dither import Dither, DitherParameters
+from leadthrough.control.lead_through import LeadThrough
+from leadthrough.control.parameters import LeadThroughParameters
+from leadthrough.friction.compensation import CoulombCompensation
+from test_speed_reference import CASES
+
+PERIODS = 20000
+
+
+def _state(controller: LeadThrough) -> np.ndarray:
+    """Everything the active law keeps or produces, in one row."""
+    references = controller._references
+    bias = controller.model_error
+    return np.concatenate([controller._drive, controller._weight, controller._feedback,
+                           bias.bias, bias.gravity_learned, [bias.confidence],
+                           references.q_ref, references.qd_ref])  # fmt: skip
+
+
+def _law_run(robot: lt.RobotDescription, parameters: LeadThroughParameters, friction,
+             compiled: bool, seed: int = 11) -> np.ndarray:  # fmt: skip
+    """The law's state over seeded random periods: rest, creep, pushes, limits, jumps.
+
+    The pose wanders (and now and then jumps, so that tracking is lost) over the whole
+    range and a little beyond (the limit zones, the end-stop reaction); the estimate is
+    quiet, a push, or a large one; G is random, M(q) the model's.
+    """
+    rng = np.random.default_rng(seed)
+    controller = LeadThrough(robot, "active", friction=friction, parameters=parameters)
+    mass_of = lt.Dynamics(robot).mass
+    n = robot.n_joints
+    offset, home, rows = np.zeros(n), robot.home(), []
+    for k in range(PERIODS):
+        phase = (k // 500) % 4  # rest, creep, moving, fast
+        qd = rng.normal(0.0, (0.0, 1e-3, 0.05, 1.0)[phase], n)
+        offset = 0.998 * offset + 0.004 * qd
+        if rng.random() < 0.005:  # a jump: tracking is lost
+            offset = offset + rng.normal(0.0, 0.1, n)
+        q = np.clip(home + offset, robot.q_min - 0.05, robot.q_max + 0.05)
+        if (k // 100) % 5 == 4:  # a joint deep in a limit zone, or just beyond a limit
+            joint = (k // 500) % n
+            q[joint] = (robot.q_min, robot.q_max)[(k // 1000) % 2][joint] + rng.normal(0, 0.1)
+        estimate = rng.normal(0.0, (0.3, 3.0, 30.0)[(k // 700) % 3], n)
+        if phase == 0:  # at rest, a model error on one joint, as much as the bias may learn
+            estimate = rng.normal(0.0, 0.05, n)
+            estimate[(k // 2000) % n] += 8.0
+        gravity = rng.normal(0.0, 20.0, n)
+        constraint = rng.normal(0.0, 2.0, n) if k % 3 == 0 else np.zeros(n)
+        mass = mass_of(np.clip(q, robot.q_min, robot.q_max))
+        if compiled:
+            controller._compiled_drive(estimate, q, qd, gravity)
+            controller._compiled_admittance(q, qd, constraint, mass)
+        else:
+            controller._update_drive(estimate, q, qd, gravity)
+            controller._admittance(q, qd, controller._drive + constraint, mass)
+        rows.append(_state(controller))
+    return np.array(rows)
+
+
+@pytest.mark.parametrize(
+    "robot_name, changes, cable",
+    [
+        ("yumi", {}, False),
+        ("yumi", {}, True),  # a position-dependent Coulomb level
+        ("yumi", {"bias_time": 0.02}, False),  # the bias learns to its bound at once
+        ("yumi", {"limit_aware": False, "assist_knee": 0.0, "position_bandwidth": 0.0}, False),
+        ("panda", {"rest_damping": 0.0, "mass_uncertainty": 0.0}, False),
+    ],
+)
+def test_compiled_law_equals_the_numpy_reference_over_random_periods(robot_name, changes, cable):
+    """20 000 periods of drive, bias, weights, references and PD torque: equal to 1e-12."""
+    robot = getattr(lt.robots, robot_name)()
+    friction = _cable(robot) if cable else lt.FrictionModel.from_robot(robot)
+    parameters = LeadThroughParameters(**changes)
+    compiled = _law_run(robot, parameters, friction, compiled=True)
+    reference = _law_run(robot, parameters, friction, compiled=False)
+    assert np.all(np.isfinite(reference))
+    weights = reference[:, robot.n_joints : 2 * robot.n_joints]
+    assert 0.05 < np.mean(weights > 0.5) < 0.95 or parameters.assist_knee == 0.0  # both sides
+    np.testing.assert_allclose(compiled, reference, rtol=1e-12, atol=1e-12)
+
+
+def test_a_nan_estimate_propagates_as_in_numpy():
+    """A NaN estimate: the same NaNs, and the same numbers where NumPy keeps them."""
+    robot = lt.robots.yumi()
+    outputs = []
+    for compiled in (True, False):
+        controller = LeadThrough(robot, "active")
+        q, qd, mass = robot.home(), np.zeros(7), lt.Dynamics(robot).mass(robot.home())
+        for k in range(5):
+            estimate = np.full(7, 2.0)
+            estimate[2] = np.nan if k == 2 else 2.0
+            if compiled:
+                controller._compiled_drive(estimate, q, qd, np.ones(7))
+                controller._compiled_admittance(q, qd, np.zeros(7), mass)
+            else:
+                controller._update_drive(estimate, q, qd, np.ones(7))
+                controller._admittance(q, qd, controller._drive, mass)
+            outputs.append(_state(controller))
+    compiled_rows, reference_rows = np.split(np.array(outputs), 2)
+    assert np.isnan(reference_rows[-1]).any()
+    np.testing.assert_allclose(compiled_rows, reference_rows, rtol=1e-12, atol=1e-12,
+                               equal_nan=True)  # fmt: skip
+
+
+def _cable(robot: lt.RobotDescription) -> lt.FrictionModel:
+    """The description's friction with a position-dependent Coulomb level."""
+    n = robot.n_joints
+    return replace(lt.FrictionModel.from_robot(robot), position_linear=np.full(n, 0.1),
+                   position_quadratic=np.full(n, 0.05))  # fmt: skip
+
+
+def _velocities(rng: np.random.Generator, k: int, n: int) -> np.ndarray:
+    """Joint speeds of period ``k``: all at rest (long enough to park), some, or none."""
+    phase = (k // 700) % 4
+    if phase == 0:
+        return rng.normal(0.0, 1e-3, n)
+    moving = np.random.default_rng(k // 100).random(n) < (0.2, 0.5, 1.0)[phase - 1]  # 0.4 s
+    return np.where(moving, rng.normal(0.0, 0.02, n), rng.normal(0.0, 1e-3, n))
+
+
+@pytest.mark.parametrize("park_time, clock", [(2.0, True), (None, True), (0.5, False)])
+def test_compiled_dither_equals_the_numpy_reference(park_time, clock):
+    """10 000 periods (rest, park, joints starting and stopping): same torque, same state."""
+    robot = lt.robots.yumi()
+    parameters = DitherParameters(park_time=park_time)
+    runs = []
+    for compiled in (True, False):
+        rng = np.random.default_rng(21)
+        dither = Dither(_cable(robot), 0.004, parameters)
+        dither.compiled = compiled
+        rows = []
+        for k in range(10000):
+            q = robot.home() + rng.normal(0.0, 0.5, 7)
+            torque = dither.step(_velocities(rng, k, 7), q, 1.7e9 + 0.004 * k if clock else None)
+            rows.append(np.concatenate([torque, dither.active, [dither.parked]]))
+        runs.append(np.array(rows))
+    assert 0.05 < np.mean(runs[1][:, 7:14]) < 0.95  # both decisions are taken
+    assert runs[1][:, -1].any() == (park_time is not None)
+    np.testing.assert_allclose(runs[0], runs[1], rtol=1e-12, atol=1e-12)
+
+
+def test_compiled_compensation_equals_the_numpy_reference():
+    """20 000 periods around the dead-band and ramp, default and per-joint bands: 1e-12."""
+    robot = lt.robots.yumi()
+    runs = []
+    for compiled in (True, False):
+        rng = np.random.default_rng(22)
+        compensation = CoulombCompensation(_cable(robot), dt=0.004)
+        compensation.compiled = compiled
+        rows = []
+        for k in range(20000):
+            qd = rng.normal(0.0, (0.002, 0.006, 0.02, 1.0)[k % 4], 7)
+            band = None if k % 3 else rng.choice([0.003, 0.01, 0.02], 7)
+            q = robot.home() + rng.normal(0.0, 0.5, 7)
+            rows.append(compensation.step(qd, q, band))
+        runs.append(np.array(rows))
+    np.testing.assert_allclose(runs[0], runs[1], rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("case", [name for name in CASES if not name.startswith("twin")])
+def test_steps_with_the_numpy_law_equal_the_compiled_one(case, monkeypatch):
+    """Whole steps (modes, calibration, constraints, a fault, the Panda): equal to 1e-12."""
+    compiled = CASES[case]()
+    for component in (LeadThrough, Dither, CoulombCompensation):
+        monkeypatch.setattr(component, "compiled", False)
+    np.testing.assert_allclose(compiled, CASES[case](), rtol=1e-12, atol=1e-12, equal_nan=True)
