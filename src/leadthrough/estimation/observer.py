@@ -263,7 +263,7 @@ class MomentumObserver:
     ) -> FloatArray:  # fmt: skip
         """One step of the smooth-rate variant (same input, eqs. (1)–(3) of its module)."""
         assert self._smooth is not None
-        friction_mean = self.friction.mean(qd, q)
+        friction_mean, friction_std = self.friction.mean_and_std(qd, q)
         drift = model.coriolis_drift - model.gravity - friction_mean
         if self._initialised:
             u = np.broadcast_to(np.asarray(tau, dtype=float), self._p.shape)
@@ -273,7 +273,9 @@ class MomentumObserver:
             self._p[:] = momentum
             self._initialised = True
         self._previous_drift = drift
-        considered = consider_variance(friction_mean, self.friction.coulomb_uncertainty(qd, q),
+        # v_C² from std_f² = v_C² + σ_f² (one evaluation of the friction model)
+        coulomb_variance = np.maximum(friction_std**2 - self.friction.noise_std**2, 0.0)
+        considered = consider_variance(friction_mean, coulomb_variance,
                                        self.friction.relative_error)  # fmt: skip
         self._std = np.sqrt(self._smooth.torque_variance + considered)
         return self.tau_ext_hat

@@ -104,7 +104,13 @@ class SmoothRateFilter:
 
 
 def consider_variance(
-    friction_mean: FloatArray, coulomb_uncertainty: FloatArray, relative_error: FloatArray
+    friction_mean: FloatArray, coulomb_variance: FloatArray, relative_error: FloatArray
 ) -> FloatArray:
-    """The friction error no filter can separate from τ_ext, eq. (3) [Nm²]."""
-    return coulomb_uncertainty**2 + (relative_error * friction_mean) ** 2
+    """The friction error no filter can separate from τ_ext, eq. (3) [Nm²].
+
+    Args:
+        friction_mean: mean_f(q̇, q) [Nm].
+        coulomb_variance: v_C(q̇, q)² [Nm²].
+        relative_error: The friction model's relative level error (one std) [–].
+    """
+    return coulomb_variance + (relative_error * friction_mean) ** 2
