@@ -12,13 +12,18 @@ import dataclasses
 
 import leadthrough as lt
 
+#: The smooth-rate observer's fields (see :func:`smooth_rate`).
+SMOOTH_RATE = {"variant": "smooth_rate", "torque_rate_noise": 1e3, "measurement_noise": 1e-8}
 
-def with_observer(robot: lt.RobotDescription, mode: str, **observer: object) -> lt.LeadThrough:
+
+def with_observer(
+    robot: lt.RobotDescription, mode: str, calibrate: bool = True, **observer: object
+) -> lt.LeadThrough:
     """The default controller of ``mode`` with the observer fields ``observer`` changed."""
     defaults = lt.LeadThroughParameters()
     tuned = dataclasses.replace(defaults.observer, **observer)  # type: ignore[arg-type]
     parameters = dataclasses.replace(defaults, observer=tuned)
-    return lt.LeadThrough(robot, mode=mode, dt=0.004, calibrate=True, parameters=parameters)
+    return lt.LeadThrough(robot, mode=mode, dt=0.004, calibrate=calibrate, parameters=parameters)
 
 
 def smooth_rate(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
@@ -29,5 +34,14 @@ def smooth_rate(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
     thesis' 1e-6 is 10× that in std). With it the variant's bandwidth while moving is
     ≈ 18 Hz, the default observer's ≈ 15 Hz, which the stability analysis assumes.
     """
-    return with_observer(robot, mode, variant="smooth_rate", torque_rate_noise=1e3,
-                         measurement_noise=1e-8)  # fmt: skip
+    return with_observer(robot, mode, **SMOOTH_RATE)
+
+
+def uncalibrated(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """The default controller without the start-up calibration."""
+    return with_observer(robot, mode, calibrate=False)
+
+
+def smooth_rate_uncalibrated(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """:func:`smooth_rate` without the start-up calibration (which reads the observer)."""
+    return with_observer(robot, mode, calibrate=False, **SMOOTH_RATE)
