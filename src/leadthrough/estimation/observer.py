@@ -69,7 +69,10 @@ class ObserverParameters:
             scale · std_f(q̇)² (1: the thesis' choice of Q_m equal to the uncertainty);
             smooth-rate variant: Q_m = scale · σ_f² dt (the friction noise, white).
         torque_rate_noise: Smooth-rate variant: Q_r, intensity of the random walk of the
-            external torque's rate [Nm²/s³]: larger is faster and noisier.
+            external torque's rate [Nm²/s³]: larger is faster and noisier. 1e3 with
+            R = 1e-8 gives ≈ 18 Hz while moving (the default observer's ≈ 15 Hz); with the
+            thesis' R = 1e-6 it gives ≈ 9 Hz, too slow for the start-up calibration's
+            5 mrad strokes (take 3e4 there: ≈ 15 Hz, std ≈ 0.7 Nm).
     """
 
     measurement_noise: float = 1e-6
