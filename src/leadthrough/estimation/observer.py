@@ -16,13 +16,16 @@ filter runs in discrete time with the *exact* discretisation over ``dt``::
     Q_d = [[Q_m dt + Q_τ dt³/3, Q_τ dt²/2], [Q_τ dt²/2, Q_τ dt]],   R_d = R / dt
 
 With diagonal Q and R the joints decouple, so every joint is its own 2×2 filter and
-all joints are updated together as arrays. Two variants:
+all joints are updated together as arrays. Three variants:
 
 - ``"two_level"`` (the thesis): Q_m takes a stand-still or a moving value per joint,
   from the friction std at rest and at speed; the two stationary gains come from the
   discrete algebraic Riccati equation, precomputed.
 - ``"time_varying"`` (beyond the thesis, which found it too costly): Q_m = std_f(q̇)²
   of the Gaussian friction model every step, with the full covariance recursion.
+- ``"smooth_rate"`` (beyond the thesis): three states ``[p, τ_ext, τ̇_ext]``, the torque's
+  rate a random walk, only the friction *noise* as process noise and the rest of the
+  friction model's error added to the std (:mod:`leadthrough.estimation.smooth_rate`).
 
 Either way :attr:`std` is the standard deviation of the estimate from the filter's
 covariance: the observer reports its own uncertainty.
@@ -39,13 +42,15 @@ from numpy.typing import ArrayLike
 
 from leadthrough.compiled import kernel
 from leadthrough.errors import ParameterError
+from leadthrough.estimation.smooth_rate import SmoothRateFilter, consider_variance
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.model.snapshot import ModelSnapshot
 from leadthrough.validation import real
 
-Variant = Literal["two_level", "time_varying"]
+Variant = Literal["two_level", "time_varying", "smooth_rate"]
+VARIANTS = ("two_level", "time_varying", "smooth_rate")
 
 
 @dataclass(frozen=True)
@@ -56,11 +61,18 @@ class ObserverParameters:
         measurement_noise: R, intensity of the momentum measurement noise [(kg m²/s)² s].
         torque_noise: Q_τ, intensity of the external torque random walk [Nm²/s]: larger is
             faster and noisier.
-        variant: ``"two_level"`` or ``"time_varying"`` (see the module docstring).
+        variant: ``"two_level"``, ``"time_varying"`` or ``"smooth_rate"`` (see the module
+            docstring).
         moving_velocity: Two-level variant: a joint is moving above this speed [rad/s];
             None takes B + 5/A of each joint's friction model (where its sigmoids settle).
         friction_noise_scale: Multiplies the friction variance to form Q_m [1/s]: Q_m =
-            scale · std_f(q̇)² (1: the thesis' choice of Q_m equal to the uncertainty).
+            scale · std_f(q̇)² (1: the thesis' choice of Q_m equal to the uncertainty);
+            smooth-rate variant: Q_m = scale · σ_f² dt (the friction noise, white).
+        torque_rate_noise: Smooth-rate variant: Q_r, intensity of the random walk of the
+            external torque's rate [Nm²/s³]: larger is faster and noisier. 1e3 with
+            R = 1e-8 gives ≈ 18 Hz while moving (the default observer's ≈ 15 Hz); with the
+            thesis' R = 1e-6 it gives ≈ 9 Hz, too slow for the start-up calibration's
+            5 mrad strokes (take 3e4 there: ≈ 15 Hz, std ≈ 0.7 Nm).
     """
 
     measurement_noise: float = 1e-6
@@ -68,6 +80,7 @@ class ObserverParameters:
     variant: Variant = "time_varying"
     moving_velocity: float | None = None
     friction_noise_scale: float = 1.0
+    torque_rate_noise: float = 1000.0
 
     def __post_init__(self) -> None:
         real(
@@ -79,8 +92,10 @@ class ObserverParameters:
         )
         real("torque_noise", self.torque_noise, minimum=0, strict=True, error=ParameterError)
         real("friction_noise_scale", self.friction_noise_scale, minimum=0, error=ParameterError)
-        if self.variant not in ("two_level", "time_varying"):
-            raise ParameterError("variant", f"'two_level' or 'time_varying', got {self.variant!r}")
+        real("torque_rate_noise", self.torque_rate_noise, minimum=0, strict=True,
+             error=ParameterError)  # fmt: skip
+        if self.variant not in VARIANTS:
+            raise ParameterError("variant", f"one of {VARIANTS}, got {self.variant!r}")
         if self.moving_velocity is not None:
             real(
                 "moving_velocity",
@@ -151,6 +166,11 @@ class MomentumObserver:
         self.parameters = parameters
         n = dynamics.n
         self._levels = self._two_level_gains() if parameters.variant == "two_level" else None
+        self._smooth = None
+        if parameters.variant == "smooth_rate":
+            white = parameters.friction_noise_scale * self.friction.noise_std**2 * self.dt
+            self._smooth = SmoothRateFilter(white, parameters.torque_rate_noise,
+                                            parameters.measurement_noise, self.dt)  # fmt: skip
         self._p, self._tau = np.zeros(n), np.zeros(n)
         # the entries of Q_d that do not depend on Q_m (Q_m enters Q₁₁ as Q_m dt)
         self._q11_torque, self._q12, self._q22 = process_noise(
@@ -186,6 +206,8 @@ class MomentumObserver:
         self._cov_rows[:2] = 0.0
         self._cov_rows[2] = variance
         self._std[:] = np.sqrt(variance)
+        if self._smooth is not None:
+            self._smooth.reset()
 
     # --- the filter --------------------------------------------------------------------
 
@@ -208,6 +230,8 @@ class MomentumObserver:
         if model is None:
             model = self.dynamics.snapshot(q, qd)
         momentum = model.mass @ qd
+        if self._smooth is not None:
+            return self._smooth_rate_update(q, qd, tau, model, momentum)
         if self._levels is None:
             friction_mean, friction_std = self.friction.mean_and_std(qd, q)
         else:  # the two-level gains need no friction std
@@ -234,6 +258,29 @@ class MomentumObserver:
         gain_p, gain_tau = self._gains(qd, friction_std)
         self._p = prior_p + gain_p * innovation
         self._tau = self._tau + gain_tau * innovation
+        return self.tau_ext_hat
+
+    def _smooth_rate_update(
+        self, q: FloatArray, qd: FloatArray, tau: ArrayLike, model: ModelSnapshot,
+        momentum: FloatArray,
+    ) -> FloatArray:  # fmt: skip
+        """One step of the smooth-rate variant (same input, eqs. (1)–(3) of its module)."""
+        assert self._smooth is not None
+        friction_mean, friction_std = self.friction.mean_and_std(qd, q)
+        drift = model.coriolis_drift - model.gravity - friction_mean
+        if self._initialised:
+            u = np.broadcast_to(np.asarray(tau, dtype=float), self._p.shape)
+            self._smooth.step(self._p, self._tau, u + 0.5 * (drift + self._previous_drift),
+                              momentum)  # fmt: skip
+        else:
+            self._p[:] = momentum
+            self._initialised = True
+        self._previous_drift = drift
+        # v_C² from std_f² = v_C² + σ_f² (one evaluation of the friction model)
+        coulomb_variance = np.maximum(friction_std**2 - self.friction.noise_std**2, 0.0)
+        considered = consider_variance(friction_mean, coulomb_variance,
+                                       self.friction.relative_error)  # fmt: skip
+        self._std = np.sqrt(self._smooth.torque_variance + considered)
         return self.tau_ext_hat
 
     def _gains(

@@ -33,7 +33,8 @@ import numpy as np
 from scipy.linalg import expm
 
 from leadthrough.control.parameters import LeadThroughParameters
-from leadthrough.estimation.observer import stationary_filter
+from leadthrough.estimation import smooth_rate
+from leadthrough.estimation.observer import ObserverParameters, stationary_filter
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
@@ -52,22 +53,24 @@ class JointLoop:
         inertia: m_ii [kg m²].
         stiffness: Hand stiffness seen at the joint [Nm/rad].
         damping: Hand damping seen at the joint [Nm s/rad].
-        observer_gains: Stationary Kalman gains (K_p [–], K_τ [1/s]).
+        observer_gains: Stationary Kalman gains (K_p [–], K_τ [1/s]), and K_ṙ [1/s²] for
+            the ``"smooth_rate"`` observer (which also estimates the torque's rate).
     """
 
     inertia: float
     stiffness: float
     damping: float
-    observer_gains: tuple[float, float]
+    observer_gains: tuple[float, ...]
 
 
 def loop_matrix(
     joint: JointLoop, parameters: LeadThroughParameters, dt: float, delay: int
 ) -> FloatArray:
-    """State transition of the closed loop over one period, (7 + delay)².
+    """State transition of the closed loop over one period, (7 + delay)² (or 8 + delay).
 
     State: q, q̇ (the arm), p̂, τ̂ (the observer), q_ref, q̇_ref (the admittance), the
-    torque applied over the last period and ``delay`` commands on their way.
+    torque applied over the last period and ``delay`` commands on their way; with three
+    observer gains the observer's torque rate ṙ̂ comes after the queue.
     """
     m, p = joint.inertia, parameters
     arm = expm(np.block([[np.array([[0.0, 1.0], [-joint.stiffness / m, -joint.damping / m]]),
@@ -75,23 +78,26 @@ def loop_matrix(
     virtual_mass = p.inertia_scale * m
     virtual_damping = m / p.damping_time
     kp, kd = m * (2.0 * np.pi * p.position_bandwidth) ** 2, m / p.velocity_time
-    gain_p, gain_tau = joint.observer_gains
+    gain_p, gain_tau, gain_rate = (*joint.observer_gains, 0.0)[:3]
+    rates = len(joint.observer_gains) - 2  # 0, or 1 for the smooth-rate observer
 
     def step(x: FloatArray) -> FloatArray:
         q, qd, p_hat, tau_hat, q_ref, qd_ref, applied = x[:7]
-        queue = list(x[7:])
-        innovation = m * qd - (p_hat + dt * (applied + tau_hat))
-        p_hat = p_hat + dt * (applied + tau_hat) + gain_p * innovation
-        tau_hat = tau_hat + gain_tau * innovation
+        queue, rate = list(x[7 : 7 + delay]), x[7 + delay :]
+        prior = p_hat + dt * (applied + tau_hat + 0.5 * dt * np.sum(rate))
+        innovation = m * qd - prior
+        p_hat = prior + gain_p * innovation
+        tau_hat = tau_hat + dt * np.sum(rate) + gain_tau * innovation
+        rate = rate + gain_rate * innovation
         qd_ref = (virtual_mass * qd_ref + dt * tau_hat) / (virtual_mass + dt * virtual_damping)
         q_ref = q_ref + dt * qd_ref
         command = kp * (q_ref - q) + kd * (qd_ref - qd)
         queue.append(command)
         torque = queue.pop(0)
         q, qd = arm[:2, :2] @ np.array([q, qd]) + arm[:2, 2] * torque
-        return np.array([q, qd, p_hat, tau_hat, q_ref, qd_ref, torque, *queue])
+        return np.array([q, qd, p_hat, tau_hat, q_ref, qd_ref, torque, *queue, *rate])
 
-    size = 7 + delay
+    size = 7 + delay + rates
     return np.column_stack([step(unit) for unit in np.eye(size)])
 
 
@@ -126,11 +132,20 @@ def joint_loops(
     observer = parameters.observer
     loops = []
     for i in range(robot.n_joints):
-        gains, _ = stationary_filter(float(friction_std[i]) ** 2, observer.torque_noise,
-                                     observer.measurement_noise, dt)  # fmt: skip
+        gains = _observer_gains(observer, float(friction_std[i]), dt)
         hand = (hand_stiffness * lever2[i], hand_damping * lever2[i])
-        loops.append(JointLoop(float(inertia[i]), *hand, (float(gains[0]), float(gains[1]))))
+        loops.append(JointLoop(float(inertia[i]), *hand, tuple(float(g) for g in gains)))
     return loops
+
+
+def _observer_gains(observer: ObserverParameters, friction_std: float, dt: float) -> FloatArray:
+    """Stationary gains of a joint whose friction std is ``friction_std`` [Nm] (moving)."""
+    if observer.variant == "smooth_rate":  # its Q_m: the friction noise, white (σ² dt)
+        noise = observer.friction_noise_scale * friction_std**2 * dt
+        return smooth_rate.stationary_filter(noise, observer.torque_rate_noise,
+                                             observer.measurement_noise, dt)[0]  # fmt: skip
+    return stationary_filter(friction_std**2, observer.torque_noise,
+                             observer.measurement_noise, dt)[0]  # fmt: skip
 
 
 def worst_damping(
