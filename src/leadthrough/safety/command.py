@@ -39,7 +39,7 @@ def bound_rows(limits: SafetyLimits) -> FloatArray:
 @kernel
 def supervised_torque(q, qd, tau_desired, mass, gravity, jacobian, bounds, scalars, teaching,
                       out, inside, fast):  # fmt: skip
-    """The supervised torque [Nm] into ``out``; returns (status, tool speed [m/s]).
+    """The supervised torque [Nm] into ``out``; returns (status, tool speed [m/s], flags).
 
     Args:
         q: Joint readings [rad], (n,).
@@ -56,14 +56,15 @@ def supervised_torque(q, qd, tau_desired, mass, gravity, jacobian, bounds, scala
         fast: Written: the joints above their speed limit.
 
     Returns:
-        :data:`GOOD`, :data:`BAD_INPUT` (nothing else done) or :data:`NOT_FINITE`; and the
-        tool speed (0 when not teaching).
+        :data:`GOOD`, :data:`BAD_INPUT` (nothing else done) or :data:`NOT_FINITE`; the
+        tool speed (0 when not teaching); whether a joint is too fast; whether one is
+        inside a wall.
     """
     n = q.shape[0]
     for i in range(n):
         if not (bounds[0, i] <= q[i] <= bounds[1, i] and -bounds[2, i] <= qd[i] <= bounds[2, i]
                 and -_LARGEST <= tau_desired[i] <= _LARGEST):  # fmt: skip
-            return BAD_INPUT, 0.0
+            return BAD_INPUT, 0.0, False, False
     limit, braking_time, damping_time = scalars[0], scalars[1], scalars[2]
     any_fast, any_inside = False, False
     for i in range(n):
@@ -110,7 +111,7 @@ def supervised_torque(q, qd, tau_desired, mass, gravity, jacobian, bounds, scala
         finite = finite and math.isfinite(tau)
         out[i] = tau
     if not finite:
-        return NOT_FINITE, speed
+        return NOT_FINITE, speed, any_fast, any_inside
     for i in range(n):
         out[i] = min(max(out[i], bounds[3, i]), bounds[4, i])
-    return GOOD, speed
+    return GOOD, speed, any_fast, any_inside

@@ -256,17 +256,17 @@ class SafetySupervisor:
             return self._supervised_numpy(q, qd, tau_desired, model)
         out, inside, fast = np.empty(n), self._inside, self._fast
         teaching = self.state is SupervisorState.TEACHING
-        status, speed = supervised_torque(q, qd, tau_desired, model.mass, model.gravity,
-            model.tool_jacobian, self._bounds, self._command_scalars, teaching, out, inside,
-            fast)  # fmt: skip
+        status, speed, any_fast, any_inside = supervised_torque(q, qd, tau_desired, model.mass,
+            model.gravity, model.tool_jacobian, self._bounds, self._command_scalars, teaching,
+            out, inside, fast)  # fmt: skip
         if status == BAD_INPUT:
             return self._supervised_numpy(q, qd, tau_desired, model)
         self._q_last_good = q
-        if "joint_speed" in self._active or fast.any():
+        if any_fast or "joint_speed" in self._active:
             self._log_joint_speed(qd, fast.copy())
         if teaching:
             self._log_tool_speed(speed)
-        if "soft_limit" in self._active or inside.any():
+        if any_inside or "soft_limit" in self._active:
             self._log_walls(q, inside.copy())
         if status == NOT_FINITE:
             self._fault("non-finite safety torque")
