@@ -1,4 +1,4 @@
-"""The compiled command path of the safety supervisor equals its NumPy reference (safety/command)."""
+"""The supervisor's compiled command path and sample check equal their NumPy references."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import pytest
 
 import leadthrough as lt
 from leadthrough.model.snapshot import ModelSnapshot
+from leadthrough.safety.checks import in_range, sample_in_range
 from leadthrough.safety.supervisor import SafetySupervisor, SupervisorState
 
 PERIODS = 20000
@@ -73,8 +74,10 @@ def _run(robot: lt.RobotDescription, compiled: bool, seed: int) -> tuple[list, l
             supervisor.teach()
         command = supervisor.command(t, q, qd, tau, model)
         rows.append(np.concatenate([command, [supervisor.max_tool_speed]]))
-        states.append((supervisor.state, supervisor.fault_reason, supervisor._q_last_good is None
-                       or supervisor._q_last_good.tolist(), sorted(supervisor._active)))  # fmt: skip
+        last_good = supervisor._q_last_good
+        states.append((supervisor.state, supervisor.fault_reason,
+                       None if last_good is None else last_good.tolist(),
+                       sorted(supervisor._active)))  # fmt: skip
         if supervisor.state is SupervisorState.FAULT and rng.random() < 0.05:
             supervisor.reset()
             supervisor.teach()
@@ -117,3 +120,22 @@ def test_the_compiled_path_brakes_saturates_and_walls_like_the_reference_each_pe
         assert not np.allclose(outputs[1], np.clip(tau, -robot.torque_limits, robot.torque_limits)
                                ) or name == "saturation", name  # fmt: skip
         np.testing.assert_allclose(outputs[0], outputs[1], rtol=1e-12, atol=1e-12, err_msg=name)
+
+
+def test_sample_range_check_agrees_with_in_range():
+    """Random (q, q̇[, τ]) with NaN, ±inf, values on the bounds and wrong shapes."""
+    rng = np.random.default_rng(6)
+    low, high = -np.arange(1.0, 22.0), np.arange(1.0, 22.0)
+    outcomes = set()
+    for _ in range(5000):
+        readings = [rng.uniform(-1.05, 1.05, 7) * high[:7] for _ in range(3)]
+        for reading in readings:
+            if rng.random() < 0.1:
+                reading[rng.integers(7)] = rng.choice([np.nan, np.inf, -np.inf, 1.0, -1.0])
+        if rng.random() < 0.05:
+            readings[rng.integers(3)] = np.zeros(rng.choice([6, 8]))
+        tau = None if rng.random() < 0.3 else readings[2]
+        expected = in_range(tuple(readings[:2] if tau is None else readings), low, high, 7)
+        assert sample_in_range(readings[0], readings[1], tau, low, high) is expected
+        outcomes.add(expected)
+    assert outcomes == {True, False}

@@ -38,6 +38,36 @@ def in_range(readings: tuple[FloatArray, ...], low: FloatArray, high: FloatArray
     return True
 
 
+def sample_in_range(
+    q: FloatArray, qd: FloatArray, tau: FloatArray | None, low: FloatArray, high: FloatArray
+) -> bool:
+    """:func:`in_range` of the readings (q, q̇[, τ]) in one compiled call.
+
+    Args:
+        q: Joint readings [rad], expected of shape (n,).
+        qd: Joint velocities [rad/s], likewise.
+        tau: Measured torques [Nm], likewise, or None.
+        low: Their lower bounds, concatenated, shape (3n,).
+        high: Their upper bounds, likewise.
+    """
+    shape = (low.shape[0] // 3,)
+    if q.shape != shape or qd.shape != shape or (tau is not None and tau.shape != shape):
+        return False
+    return _readings_within(q, qd, q if tau is None else tau, 2 if tau is None else 3, low, high)
+
+
+@kernel
+def _readings_within(q, qd, tau, count, low, high):  # fmt: skip
+    """Whether the first ``count`` of (q, q̇, τ) lie within [low, high] (NaN does not)."""
+    n = q.shape[0]
+    for k in range(count):
+        values = q if k == 0 else (qd if k == 1 else tau)
+        for i in range(n):
+            if not low[k * n + i] <= values[i] <= high[k * n + i]:
+                return False
+    return True
+
+
 @kernel
 def within_bounds(values: FloatArray, low: FloatArray, high: FloatArray, offset: int) -> bool:
     """Whether ``low[offset + i] <= values[i] <= high[offset + i]`` for all i (NaN: no).

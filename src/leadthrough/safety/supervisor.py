@@ -41,6 +41,7 @@ from leadthrough.safety.checks import (
     command_problem,
     floats,
     in_range,
+    sample_in_range,
     sample_reason,
     trusted_velocity,
     within_bounds,
@@ -394,8 +395,7 @@ class SafetySupervisor:
         latched (``_fault`` would drop it): then it is a placeholder.
         """
         limits = self._limits
-        readings = (q, qd) if tau is None else (q, qd, tau)
-        if in_range(readings, limits.sample_low, limits.sample_high, self.n):
+        if sample_in_range(q, qd, tau, limits.sample_low, limits.sample_high):
             return None
         if self.state is SupervisorState.FAULT:
             return _UNEXPLAINED
