@@ -20,6 +20,12 @@ def floats(value: object) -> FloatArray:
     return np.array(value, dtype=float)
 
 
+def as_floats(value: object) -> FloatArray:
+    """``value`` as a contiguous float array, not copied if it is one (to read, not keep)."""
+    array = np.asarray(value, dtype=float)
+    return array if array.flags.c_contiguous else array.copy()
+
+
 def in_range(readings: tuple[FloatArray, ...], low: FloatArray, high: FloatArray, n: int) -> bool:
     """Whether every reading has shape (n,) and lies within [low, high] (NaN does not).
 

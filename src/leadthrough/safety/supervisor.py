@@ -38,6 +38,7 @@ from leadthrough.model.snapshot import ModelSnapshot
 from leadthrough.safety import braking
 from leadthrough.safety.checks import (
     FrozenEncoders,
+    as_floats,
     command_problem,
     floats,
     in_range,
@@ -185,8 +186,8 @@ class SafetySupervisor:
         """
         try:
             self._t = float(t)
-            position, velocity = floats(q), floats(qd)
-            tau = None if tau_measured is None else floats(tau_measured)
+            position, velocity = floats(q), as_floats(qd)  # q is kept: a copy
+            tau = None if tau_measured is None else as_floats(tau_measured)
             problem = self._sample_problem(position, velocity, tau)
             problem = problem or self._encoders.update(position, velocity)
         except Exception as error:  # nothing may escape on the motor path
@@ -221,7 +222,7 @@ class SafetySupervisor:
         try:
             self._t = float(t)
             if self.state is not SupervisorState.FAULT:
-                tau = self._supervised(floats(q), floats(qd), floats(tau_desired), model)
+                tau = self._supervised(floats(q), as_floats(qd), as_floats(tau_desired), model)
                 if tau is not None:
                     return tau
         except Exception as error:  # nothing may escape on the motor path
