@@ -7,7 +7,7 @@ import pytest
 
 import leadthrough as lt
 from leadthrough.model.snapshot import ModelSnapshot
-from leadthrough.safety.checks import in_range, sample_in_range
+from leadthrough.safety.checks import OUT_OF_RANGE, FrozenEncoders, in_range
 from leadthrough.safety.supervisor import SafetySupervisor, SupervisorState
 
 PERIODS = 20000
@@ -122,20 +122,32 @@ def test_the_compiled_path_brakes_saturates_and_walls_like_the_reference_each_pe
         np.testing.assert_allclose(outputs[0], outputs[1], rtol=1e-12, atol=1e-12, err_msg=name)
 
 
-def test_sample_range_check_agrees_with_in_range():
-    """Random (q, q̇[, τ]) with NaN, ±inf, values on the bounds and wrong shapes."""
+def test_checked_count_agrees_with_in_range_then_update():
+    """Random (q, q̇[, τ]) with NaN, ±inf, bounds, wrong shapes and repeats: same verdicts."""
     rng = np.random.default_rng(6)
     low, high = -np.arange(1.0, 22.0), np.arange(1.0, 22.0)
-    outcomes = set()
-    for _ in range(5000):
+    checked, reference = FrozenEncoders(7, 4), FrozenEncoders(7, 4)
+    outcomes, previous = set(), None
+    for k in range(5000):
         readings = [rng.uniform(-1.05, 1.05, 7) * high[:7] for _ in range(3)]
+        if previous is not None and rng.random() < 0.4:  # the same sample again
+            readings = [reading.copy() for reading in previous]
         for reading in readings:
-            if rng.random() < 0.1:
+            if rng.random() < 0.05:
                 reading[rng.integers(7)] = rng.choice([np.nan, np.inf, -np.inf, 1.0, -1.0])
-        if rng.random() < 0.05:
+        if rng.random() < 0.03:
             readings[rng.integers(3)] = np.zeros(rng.choice([6, 8]))
+        previous = readings
         tau = None if rng.random() < 0.3 else readings[2]
-        expected = in_range(tuple(readings[:2] if tau is None else readings), low, high, 7)
-        assert sample_in_range(readings[0], readings[1], tau, low, high) is expected
-        outcomes.add(expected)
-    assert outcomes == {True, False}
+        if k % 1000 == 999:
+            checked.clear()
+            reference.clear()
+        count = checked.count(readings[0], readings[1], tau, low, high)
+        if in_range(tuple(readings[:2] if tau is None else readings), low, high, 7):
+            expected = reference.update(readings[0], readings[1])
+            assert checked.reason(count) == expected and count != OUT_OF_RANGE
+        else:
+            assert count == OUT_OF_RANGE
+        np.testing.assert_array_equal(checked._runs, reference._runs)
+        outcomes.add(count if count < 0 else "frozen")
+    assert outcomes == {OUT_OF_RANGE, -1, "frozen"}

@@ -37,12 +37,12 @@ from leadthrough.model.dynamics import Dynamics
 from leadthrough.model.snapshot import ModelSnapshot
 from leadthrough.safety import braking
 from leadthrough.safety.checks import (
+    OUT_OF_RANGE,
     FrozenEncoders,
     as_floats,
     command_problem,
     floats,
     in_range,
-    sample_in_range,
     sample_reason,
     trusted_velocity,
     within_bounds,
@@ -188,8 +188,14 @@ class SafetySupervisor:
             self._t = float(t)
             position, velocity = floats(q), as_floats(qd)  # q is kept: a copy
             tau = None if tau_measured is None else as_floats(tau_measured)
-            problem = self._sample_problem(position, velocity, tau)
-            problem = problem or self._encoders.update(position, velocity)
+            limits = self._limits  # range check and encoder count in one compiled call
+            count = self._encoders.count(position, velocity, tau, limits.sample_low,
+                                         limits.sample_high)  # fmt: skip
+            if count == OUT_OF_RANGE:  # spell out why (the NumPy reference)
+                problem = self._sample_problem(position, velocity, tau)
+                problem = problem or self._encoders.update(position, velocity)
+            else:
+                problem = self._encoders.reason(count)
         except Exception as error:  # nothing may escape on the motor path
             problem = failure("sensor check", error)
         if problem is not None:
@@ -396,7 +402,8 @@ class SafetySupervisor:
         latched (``_fault`` would drop it): then it is a placeholder.
         """
         limits = self._limits
-        if sample_in_range(q, qd, tau, limits.sample_low, limits.sample_high):
+        readings = (q, qd) if tau is None else (q, qd, tau)
+        if in_range(readings, limits.sample_low, limits.sample_high, self.n):
             return None
         if self.state is SupervisorState.FAULT:
             return _UNEXPLAINED
