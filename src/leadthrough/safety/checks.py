@@ -1,8 +1,8 @@
 """Checks of every sensor sample and command: shape, finite, in range, not frozen (SPEC §7).
 
 Each check returns the one-line reason a reading is bad (joints numbered from 1 at the
-base), or None. A good sample costs one compiled pass over its readings (:func:`in_range`,
-~0.2 µs a reading); the reasons are only spelled out for a bad one.
+base), or None. A good sample costs one compiled pass over its readings, which also counts
+its encoders (:meth:`FrozenEncoders.count`); the reasons are only spelled out for a bad one.
 """
 
 from __future__ import annotations

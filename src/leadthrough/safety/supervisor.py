@@ -13,10 +13,12 @@ non-finite command: then the safe stop (gravity hold with damping, then gravity 
 alone, no feedback) until ``reset()``. No exception escapes ``check`` or ``command``.
 Messages number the joints from 1 at the base.
 
-Cost: the bounds are computed once, in the constructor; a good sample is validated with
-one compiled pass over its readings, the walls and the joint braking are skipped while no
-joint is near a wall or too fast, and the reasons, events and per-joint loops only run
-when something is wrong (a fault, a wall, a joint or the tool too fast).
+Cost: the bounds are computed once, in the constructor; a good sample is validated and its
+encoders counted in one compiled call (:meth:`.checks.FrozenEncoders.count`), the command
+is limited in another (:mod:`.command`: saturation, joint and tool braking, walls,
+finiteness), and the reasons and events are only spelled out when something is wrong (a
+fault, a wall, a joint or the tool too fast). The readable NumPy code of the command path
+(``compiled = False``) is the reference the tests hold the compiled one to.
 
 The settings and bounds are in :mod:`.limits`, the sample checks in :mod:`.checks`, the
 braking torques, walls and safe-stop hold in :mod:`.braking`; this module holds the state
