@@ -9,6 +9,7 @@ import leadthrough as lt
 from leadthrough.model.snapshot import ModelSnapshot
 from leadthrough.safety.checks import OUT_OF_RANGE, FrozenEncoders, in_range
 from leadthrough.safety.supervisor import SafetySupervisor, SupervisorState
+from test_speed_reference import CASES
 
 PERIODS = 20000
 
@@ -151,3 +152,11 @@ def test_checked_count_agrees_with_in_range_then_update():
         np.testing.assert_array_equal(checked._runs, reference._runs)
         outcomes.add(count if count < 0 else "frozen")
     assert outcomes == {OUT_OF_RANGE, -1, "frozen"}
+
+
+@pytest.mark.parametrize("case", [name for name in CASES if not name.startswith("twin")])
+def test_steps_with_the_numpy_supervisor_equal_the_compiled_one(case, monkeypatch):
+    """Whole steps (modes, calibration, constraints, a fault, the Panda): equal to 1e-12."""
+    compiled = CASES[case]()
+    monkeypatch.setattr(SafetySupervisor, "compiled", False)
+    np.testing.assert_allclose(compiled, CASES[case](), rtol=1e-12, atol=1e-12, equal_nan=True)

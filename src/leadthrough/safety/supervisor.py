@@ -96,8 +96,9 @@ class SafetySupervisor:
         parameters: Safety settings (read once, here, with the robot's limits).
     """
 
-    #: Run the command path compiled (:mod:`.command`); False runs the readable NumPy
-    #: reference (``_supervised_numpy``), which the tests compare it to.
+    #: Run the sample check and the command path compiled (:meth:`.checks.FrozenEncoders.count`,
+    #: :mod:`.command`); False runs the readable NumPy reference (``_sample_problem`` then
+    #: ``FrozenEncoders.update``; ``_supervised_numpy``), which the tests compare it to.
     compiled = True
 
     def __init__(
@@ -190,10 +191,11 @@ class SafetySupervisor:
             self._t = float(t)
             position, velocity = floats(q), as_floats(qd)  # q is kept: a copy
             tau = None if tau_measured is None else as_floats(tau_measured)
-            limits = self._limits  # range check and encoder count in one compiled call
-            count = self._encoders.count(position, velocity, tau, limits.sample_low,
-                                         limits.sample_high)  # fmt: skip
-            if count == OUT_OF_RANGE:  # spell out why (the NumPy reference)
+            limits, count = self._limits, OUT_OF_RANGE
+            if self.compiled:  # range check and encoder count in one compiled call
+                count = self._encoders.count(position, velocity, tau, limits.sample_low,
+                                             limits.sample_high)  # fmt: skip
+            if count == OUT_OF_RANGE:  # spell out why (the NumPy reference, step by step)
                 problem = self._sample_problem(position, velocity, tau)
                 problem = problem or self._encoders.update(position, velocity)
             else:
