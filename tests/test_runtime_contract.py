@@ -110,7 +110,7 @@ def test_an_exception_inside_the_step_is_named_and_the_arm_stopped_that_period(m
     def broken(self, qd, q=None):
         raise IndexError("index 9 is out of bounds for axis 0 with size 7")
 
-    monkeypatch.setattr(FrictionModel, "mean_and_std", broken)
+    monkeypatch.setattr(FrictionModel, "sigmoid_terms", broken)
     qd = np.full(N, 0.05)
     command = controller.step(q, qd)
     reason = controller.supervisor.fault_reason

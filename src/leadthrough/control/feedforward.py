@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,7 +35,8 @@ class DelayLine:
     """What was sent, as the torque measured now contains it: ``delay`` periods ago.
 
     One entry per period, pushed with :meth:`push`; :attr:`measured` is the entry pushed
-    ``delay`` periods before the current one (zeros at the start).
+    ``delay`` periods before the current one (zeros at the start). A ring buffer
+    preallocated once: a period copies its entry in and the measured one out.
 
     Args:
         shape: Shape of one entry, e.g. (2, n) for a command and its dither [Nm].
@@ -45,21 +45,23 @@ class DelayLine:
 
     def __init__(self, shape: tuple[int, ...], delay: int) -> None:
         self.delay = measurement_delay(delay)
-        self._shape = shape
+        self._ring = np.zeros((self.delay, *shape))
         self.reset()
 
     def reset(self) -> None:
         """Nothing sent yet: zeros."""
-        self._line = deque([np.zeros(self._shape) for _ in range(self.delay)], maxlen=self.delay)
+        self._ring[...] = 0.0
+        self._oldest = 0  # the slot pushed ``delay`` periods ago, overwritten next
 
     @property
     def measured(self) -> FloatArray:
         """The entry sent ``delay`` periods ago (a fresh copy)."""
-        return self._line[0].copy()
+        return self._ring[self._oldest].copy()
 
     def push(self, entry: ArrayLike) -> None:
         """Record what is sent this period."""
-        self._line.append(np.array(entry, dtype=float))
+        self._ring[self._oldest] = entry
+        self._oldest = (self._oldest + 1) % self.delay
 
 
 class GravityCompensation:
@@ -164,9 +166,9 @@ class PassiveFeedForward:
                 its own periods.
         """
         q = np.asarray(q, dtype=float)
-        n = self.dynamics.n
-        dither, dead_band = np.zeros(n), None
-        if self.dither is not None:
+        if self.dither is None:
+            dither, dead_band = np.zeros(self.dynamics.n), None
+        else:
             dither = self.dither.step(qd, q, t)
             base = self.compensation.parameters.dead_band
             dead_band = np.where(self.dither.active, self.dither.parameters.moving_velocity, base)
@@ -174,9 +176,7 @@ class PassiveFeedForward:
         if self._sent is not None:
             in_measurement = self._sent.measured
             self._sent.push(dither)
-        return FeedForwardTorques(
-            gravity=self.dynamics.gravity(q) if model is None else model.gravity,
-            friction=self.compensation.step(qd, q, dead_band),
-            dither=dither,
-            dither_in_measurement=in_measurement,
-        )
+        gravity = self.dynamics.gravity(q) if model is None else model.gravity
+        # (gravity, friction, dither, dither_in_measurement), positional: the cheaper call
+        return FeedForwardTorques(gravity, self.compensation.step(qd, q, dead_band), dither,
+                                  in_measurement)  # fmt: skip

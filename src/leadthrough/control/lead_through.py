@@ -306,8 +306,8 @@ class LeadThrough:
 
     def _measured(self, tau_measured: FloatArray | None) -> tuple[FloatArray, FloatArray]:
         """The motor torque applied over the last period [Nm] and the dither it holds."""
-        command, dither = self._sent.measured
-        return (command if tau_measured is None else tau_measured), dither
+        sent = self._sent.measured  # rows: the command, its dither
+        return (sent[0] if tau_measured is None else tau_measured), sent[1]
 
     def _calibrate(
         self, t: float, model: ModelSnapshot, tau_measured: FloatArray | None

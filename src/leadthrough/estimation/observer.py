@@ -229,6 +229,15 @@ class MomentumObserver:
         q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
         if model is None:
             model = self.dynamics.snapshot(q, qd)
+        if self._initialised and self._levels is None and self._smooth is None and self.compiled:
+            tau = self._input(tau)
+            if qd.shape == q.shape == tau.shape:  # time-varying: one compiled pass
+                level, viscous, upper, lower = self.friction.sigmoid_terms(qd, q)
+                _time_varying_step(self._p, self._tau, self._previous_drift, self._cov_rows,
+                                   self._std, tau, model.mass, qd, model.coriolis_drift,
+                                   model.gravity, level, viscous, upper, lower,
+                                   self.friction.noise_std, self._constants)  # fmt: skip
+                return self._tau.copy()
         momentum = model.mass @ qd
         if self._smooth is not None:
             return self._smooth_rate_update(q, qd, tau, model, momentum)
@@ -241,14 +250,7 @@ class MomentumObserver:
             self._previous_drift = model.coriolis_drift - model.gravity - friction_mean
             self._initialised = True
             return self.tau_ext_hat
-        tau = np.asarray(tau, dtype=float)
-        if tau.shape != self._p.shape:  # a scalar broadcasts, a wrong shape raises, as in NumPy
-            tau = np.ascontiguousarray(np.broadcast_to(tau, self._p.shape))
-        if friction_std is not None and self.compiled:  # time-varying: one compiled pass
-            _time_varying_step(self._p, self._tau, self._previous_drift, self._cov_rows,
-                               self._std, tau, momentum, model.coriolis_drift, model.gravity,
-                               friction_mean, friction_std, self._constants)  # fmt: skip
-            return self._tau.copy()
+        tau = self._input(tau)
         drift = model.coriolis_drift - model.gravity - friction_mean
         # input over the last period: measured torque plus the drift terms (trapezoid)
         u = tau + 0.5 * (drift + self._previous_drift)
@@ -282,6 +284,13 @@ class MomentumObserver:
                                        self.friction.relative_error)  # fmt: skip
         self._std = np.sqrt(self._smooth.torque_variance + considered)
         return self.tau_ext_hat
+
+    def _input(self, tau: ArrayLike) -> FloatArray:
+        """The motor torque [Nm] as (n,) floats: a scalar broadcasts, a wrong shape raises."""
+        tau = np.asarray(tau, dtype=float)
+        if tau.shape != self._p.shape:  # as in NumPy
+            tau = np.ascontiguousarray(np.broadcast_to(tau, self._p.shape))
+        return tau
 
     def _gains(
         self, qd: FloatArray, friction_std: FloatArray | None
@@ -332,24 +341,33 @@ class MomentumObserver:
 
 
 @kernel
-def _time_varying_step(p, tau_hat, previous_drift, cov, std, tau, momentum, coriolis_drift,
-                       gravity, friction_mean, friction_std, constants):  # fmt: skip
+def _time_varying_step(p, tau_hat, previous_drift, cov, std, tau, mass, qd, coriolis_drift,
+                       gravity, level, viscous, upper, lower, noise_std, constants):  # fmt: skip
     """One step of the time-varying filter, all joints, in place (compiled, ~1 µs).
 
     The same arithmetic, in the same order, as :meth:`MomentumObserver.update` with
     :meth:`MomentumObserver._covariance_step` (the readable reference, which the tests
-    hold this to): predict with the trapezoidal input, predict and update the 2×2
+    hold this to): the momentum M q̇, the friction mean and std from the terms of
+    :meth:`~leadthrough.friction.model.FrictionModel.sigmoid_terms` (as
+    ``mean_and_std``), predict with the trapezoidal input, predict and update the 2×2
     covariance with Q_m = scale · std_f², correct the state with the gains.
     """
     dt, scale, q11_torque, q12, q22, noise_d = constants
-    for i in range(p.shape[0]):
-        drift = coriolis_drift[i] - gravity[i] - friction_mean[i]
+    n = p.shape[0]
+    for i in range(n):
+        momentum = 0.0
+        for j in range(n):
+            momentum += mass[i, j] * qd[j]
+        half_level = 0.5 * level[i]
+        friction_mean = half_level * (upper[i] + lower[i]) + viscous[i]
+        friction_std = math.hypot(half_level * (upper[i] - lower[i]), noise_std[i])
+        drift = coriolis_drift[i] - gravity[i] - friction_mean
         u = tau[i] + 0.5 * (drift + previous_drift[i])
         previous_drift[i] = drift
         prior_p = p[i] + dt * (u + tau_hat[i])
-        innovation = momentum[i] - prior_p
+        innovation = momentum - prior_p
         p11, p12, p22 = cov[0, i], cov[1, i], cov[2, i]
-        model_noise = scale * (friction_std[i] * friction_std[i])
+        model_noise = scale * (friction_std * friction_std)
         prior12 = p12 + dt * p22 + q12
         prior22 = p22 + q22
         prior11 = p11 + dt * (2.0 * p12 + dt * p22) + dt * model_noise + q11_torque

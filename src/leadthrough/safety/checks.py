@@ -1,8 +1,8 @@
 """Checks of every sensor sample and command: shape, finite, in range, not frozen (SPEC §7).
 
 Each check returns the one-line reason a reading is bad (joints numbered from 1 at the
-base), or None. A good sample costs one compiled pass over its readings (:func:`in_range`,
-~0.2 µs a reading); the reasons are only spelled out for a bad one.
+base), or None. A good sample costs one compiled pass over its readings, which also counts
+its encoders (:meth:`FrozenEncoders.count`); the reasons are only spelled out for a bad one.
 """
 
 from __future__ import annotations
@@ -18,6 +18,12 @@ from leadthrough.safety.limits import SafetyLimits
 def floats(value: object) -> FloatArray:
     """A fresh float array of ``value`` (the caller may reuse its buffer)."""
     return np.array(value, dtype=float)
+
+
+def as_floats(value: object) -> FloatArray:
+    """``value`` as a contiguous float array, not copied if it is one (to read, not keep)."""
+    array = np.asarray(value, dtype=float)
+    return array if array.flags.c_contiguous else array.copy()
 
 
 def in_range(readings: tuple[FloatArray, ...], low: FloatArray, high: FloatArray, n: int) -> bool:
@@ -98,6 +104,11 @@ def command_problem(tau: FloatArray, n: int) -> str | None:
     return f"non-finite command on joint {bad[0] + 1}" if bad.size else None
 
 
+#: :meth:`FrozenEncoders.count` of a sample with a reading out of range (or of another shape).
+OUT_OF_RANGE = -2
+_NO_BOUNDS = np.zeros(0)
+
+
 class FrozenEncoders:
     """Counts bit-identical (q, q̇) samples per joint: a frozen encoder repeats itself.
 
@@ -118,14 +129,48 @@ class FrozenEncoders:
 
     def update(self, q: FloatArray, qd: FloatArray) -> str | None:
         """Count one sample (q [rad], q̇ [rad/s], shape (n,)); a frozen encoder's reason, or None."""
+        return self.reason(self.count(q, qd))
+
+    def count(
+        self,
+        q: FloatArray,
+        qd: FloatArray,
+        tau: FloatArray | None = None,
+        low: FloatArray | None = None,
+        high: FloatArray | None = None,
+    ) -> int:
+        """Count one sample if its readings are within [low, high] (as :func:`in_range`).
+
+        Args:
+            q: Joint readings [rad], shape (n,).
+            qd: Joint velocities [rad/s], shape (n,).
+            tau: Measured torques [Nm], shape (n,), or None.
+            low: Lower bounds of (q, q̇, τ), shape (3n,); None: no range check.
+            high: Upper bounds, likewise.
+
+        Returns:
+            :data:`OUT_OF_RANGE` (nothing counted), −1, or the first frozen joint.
+        """
         first = self._previous_bits is None
         if first:
             self._previous_bits = np.zeros(2 * self.n, dtype=np.uint64)
+        shape = (self.n,)
+        if q.shape != shape or qd.shape != shape or (tau is not None and tau.shape != shape):
+            return OUT_OF_RANGE  # as in_range: a reading of another shape is not in range
+        checked = 0 if low is None or high is None else (2 if tau is None else 3)
         # a joint whose q and q̇ bits both repeat counts on, a changed one restarts at 1
-        i = _count_repeats(q, qd, self._previous_bits, self._runs, first, self.periods)  # type: ignore[arg-type]
-        if i < 0:
+        low = _NO_BOUNDS if low is None else low
+        high = _NO_BOUNDS if high is None else high
+        return _count_repeats(q, qd, q if tau is None else tau, checked, low, high,  # type: ignore[no-any-return]
+                              self._previous_bits, self._runs, first, self.periods)  # fmt: skip
+
+    def reason(self, count: int) -> str | None:
+        """The reason for a frozen joint of :meth:`count` (an index ≥ 0), else None."""
+        if count < 0:
             return None
-        return f"joint {i + 1} encoder frozen: q and qd identical for {self._runs[i]} samples"
+        return (
+            f"joint {count + 1} encoder frozen: q and qd identical for {self._runs[count]} samples"
+        )
 
     def frozen(self) -> NDArray[np.bool_]:
         """Joints whose encoder is frozen: ``periods`` identical samples (0: none)."""
@@ -135,19 +180,21 @@ class FrozenEncoders:
 
 
 @kernel
-def _count_repeats(
-    q: FloatArray,
-    qd: FloatArray,
-    previous_bits: NDArray[np.uint64],
-    runs: NDArray[np.int64],
-    first: bool,
-    periods: int,
-) -> int:
+def _count_repeats(q, qd, tau, checked, low, high, previous_bits, runs, first,
+                   periods):  # fmt: skip
     """Count bit-identical (q, q̇) per joint in place; the first frozen joint, or −1.
 
-    ``previous_bits`` holds the bits of the last (q, q̇) and is overwritten with these.
+    First, when ``checked`` > 0, the first ``checked`` of (q, q̇, τ) must lie within
+    [low, high] (NaN does not, as in :func:`in_range`): else :data:`OUT_OF_RANGE`
+    and nothing is counted. ``previous_bits`` holds the bits of the last (q, q̇) and is
+    overwritten with these.
     """
     n = q.shape[0]
+    for k in range(checked):
+        values = q if k == 0 else (qd if k == 1 else tau)
+        for i in range(n):
+            if not low[k * n + i] <= values[i] <= high[k * n + i]:
+                return OUT_OF_RANGE
     q_bits, qd_bits = q.view(np.uint64), qd.view(np.uint64)
     frozen = -1
     for i in range(n):

@@ -13,10 +13,12 @@ non-finite command: then the safe stop (gravity hold with damping, then gravity 
 alone, no feedback) until ``reset()``. No exception escapes ``check`` or ``command``.
 Messages number the joints from 1 at the base.
 
-Cost: the bounds are computed once, in the constructor; a good sample is validated with
-one compiled pass over its readings, the walls and the joint braking are skipped while no
-joint is near a wall or too fast, and the reasons, events and per-joint loops only run
-when something is wrong (a fault, a wall, a joint or the tool too fast).
+Cost: the bounds are computed once, in the constructor; a good sample is validated and its
+encoders counted in one compiled call (:meth:`.checks.FrozenEncoders.count`), the command
+is limited in another (:mod:`.command`: saturation, joint and tool braking, walls,
+finiteness), and the reasons and events are only spelled out when something is wrong (a
+fault, a wall, a joint or the tool too fast). The readable NumPy code of the command path
+(``compiled = False``) is the reference the tests hold the compiled one to.
 
 The settings and bounds are in :mod:`.limits`, the sample checks in :mod:`.checks`, the
 braking torques, walls and safe-stop hold in :mod:`.braking`; this module holds the state
@@ -37,7 +39,9 @@ from leadthrough.model.dynamics import Dynamics
 from leadthrough.model.snapshot import ModelSnapshot
 from leadthrough.safety import braking
 from leadthrough.safety.checks import (
+    OUT_OF_RANGE,
     FrozenEncoders,
+    as_floats,
     command_problem,
     floats,
     in_range,
@@ -45,6 +49,7 @@ from leadthrough.safety.checks import (
     trusted_velocity,
     within_bounds,
 )
+from leadthrough.safety.command import BAD_INPUT, NOT_FINITE, bound_rows, supervised_torque
 from leadthrough.safety.limits import SafetyLimits, SafetyParameters
 from leadthrough.validation import real
 
@@ -91,6 +96,11 @@ class SafetySupervisor:
         parameters: Safety settings (read once, here, with the robot's limits).
     """
 
+    #: Run the sample check and the command path compiled (:meth:`.checks.FrozenEncoders.count`,
+    #: :mod:`.command`); False runs the readable NumPy reference (``_sample_problem`` then
+    #: ``FrozenEncoders.update``; ``_supervised_numpy``), which the tests compare it to.
+    compiled = True
+
     def __init__(
         self, dynamics: Dynamics, dt: float = 0.004, parameters: SafetyParameters | None = None
     ) -> None:
@@ -108,6 +118,10 @@ class SafetySupervisor:
         self._fault_time = 0.0
         self._q_last_good: FloatArray | None = None
         self._in_overrun = False
+        p = self.parameters
+        self._command_scalars = np.array([p.tool_speed_limit, p.braking_time,
+                                          p.wall_damping_time])  # fmt: skip
+        self._inside, self._fast = np.zeros(self.n, dtype=bool), np.zeros(self.n, dtype=bool)
         self._clear_episodes()
 
     def use_model(self, dynamics: Dynamics) -> None:
@@ -123,6 +137,7 @@ class SafetySupervisor:
         self.dynamics = dynamics
         self.robot = dynamics.robot
         self._limits = SafetyLimits.of(self.robot, self.parameters)
+        self._bounds = bound_rows(self._limits)  # for the compiled command path
 
     def teach(self) -> None:
         """Switch to TEACHING (tool speed limited); ignored while in FAULT."""
@@ -174,10 +189,17 @@ class SafetySupervisor:
         """
         try:
             self._t = float(t)
-            position, velocity = floats(q), floats(qd)
-            tau = None if tau_measured is None else floats(tau_measured)
-            problem = self._sample_problem(position, velocity, tau)
-            problem = problem or self._encoders.update(position, velocity)
+            position, velocity = floats(q), as_floats(qd)  # q is kept: a copy
+            tau = None if tau_measured is None else as_floats(tau_measured)
+            limits, count = self._limits, OUT_OF_RANGE
+            if self.compiled:  # range check and encoder count in one compiled call
+                count = self._encoders.count(position, velocity, tau, limits.sample_low,
+                                             limits.sample_high)  # fmt: skip
+            if count == OUT_OF_RANGE:  # spell out why (the NumPy reference, step by step)
+                problem = self._sample_problem(position, velocity, tau)
+                problem = problem or self._encoders.update(position, velocity)
+            else:
+                problem = self._encoders.reason(count)
         except Exception as error:  # nothing may escape on the motor path
             problem = failure("sensor check", error)
         if problem is not None:
@@ -210,7 +232,7 @@ class SafetySupervisor:
         try:
             self._t = float(t)
             if self.state is not SupervisorState.FAULT:
-                tau = self._supervised(floats(q), floats(qd), floats(tau_desired), model)
+                tau = self._supervised(floats(q), as_floats(qd), as_floats(tau_desired), model)
                 if tau is not None:
                     return tau
         except Exception as error:  # nothing may escape on the motor path
@@ -235,7 +257,38 @@ class SafetySupervisor:
     def _supervised(
         self, q: FloatArray, qd: FloatArray, tau_desired: FloatArray, model: ModelSnapshot | None
     ) -> FloatArray | None:
-        """The supervised torque [Nm], or None after latching a fault (bad input or torque)."""
+        """The supervised torque [Nm], or None after latching a fault (bad input or torque).
+
+        One compiled pass (:func:`.command.supervised_torque`) when the model is given and
+        the shapes fit; else, and for a bad input (to spell out why), the NumPy reference.
+        """
+        n = self.n
+        if (not self.compiled or model is None or q.shape != (n,) or qd.shape != (n,)
+                or tau_desired.shape != (n,)):  # fmt: skip
+            return self._supervised_numpy(q, qd, tau_desired, model)
+        out, inside, fast = np.empty(n), self._inside, self._fast
+        teaching = self.state is SupervisorState.TEACHING
+        status, speed, any_fast, any_inside = supervised_torque(q, qd, tau_desired, model.mass,
+            model.gravity, model.tool_jacobian, self._bounds, self._command_scalars, teaching,
+            out, inside, fast)  # fmt: skip
+        if status == BAD_INPUT:
+            return self._supervised_numpy(q, qd, tau_desired, model)
+        self._q_last_good = q
+        if any_fast or "joint_speed" in self._active:
+            self._log_joint_speed(qd, fast.copy())
+        if teaching:
+            self._log_tool_speed(speed)
+        if any_inside or "soft_limit" in self._active:
+            self._log_walls(q, inside.copy())
+        if status == NOT_FINITE:
+            self._fault("non-finite safety torque")
+            return None
+        return out
+
+    def _supervised_numpy(
+        self, q: FloatArray, qd: FloatArray, tau_desired: FloatArray, model: ModelSnapshot | None
+    ) -> FloatArray | None:
+        """:meth:`_supervised` with the NumPy functions of :mod:`.braking` (the reference)."""
         if self._input_problem(q, qd, tau_desired) is not None:
             return None
         self._q_last_good = q
@@ -266,19 +319,24 @@ class SafetySupervisor:
 
         None (no torque) while no joint is inside a wall, nor was the period before.
         """
-        limits, robot = self._limits, self.robot
+        limits = self._limits
         if "soft_limit" not in self._active and within_bounds(
             q, limits.wall_low, limits.wall_high, 0
         ):
             return None
         damping_time = self.parameters.wall_damping_time
         torque, inside = braking.walls(limits, q, qd, inertia, damping_time)
+        self._log_walls(q, inside)
+        return torque
+
+    def _log_walls(self, q: FloatArray, inside: NDArray[np.bool_]) -> None:
+        """One event for each joint that entered a wall this period."""
+        limits, robot = self._limits, self.robot
         for i in self._started("soft_limit", inside):
             lower = q[i] < limits.wall_low[i]
             side, hard = ("lower", robot.q_min[i]) if lower else ("upper", robot.q_max[i])
             detail = f"joint {i + 1} entered the {side} soft limit at {q[i]:.4g} rad"
             self._log("soft_limit", f"{detail} (hard limit {hard:.4g} rad)")
-        return torque
 
     def _joint_braking(self, qd: FloatArray, inertia: FloatArray) -> FloatArray | None:
         """Joint braking torque [Nm] (see :func:`.braking.joint_braking`), logging each episode.
@@ -292,10 +350,15 @@ class SafetySupervisor:
             return None
         braking_time = self.parameters.braking_time
         torque, fast = braking.joint_braking(limits, qd, inertia, braking_time)
-        for i in self._started("joint_speed", fast):
-            detail = f"joint {i + 1} speed {abs(qd[i]):.4g} rad/s above {limits.speed[i]:.4g} rad/s"
-            self._log("joint_speed", f"{detail}: braking")
+        self._log_joint_speed(qd, fast)
         return torque
+
+    def _log_joint_speed(self, qd: FloatArray, fast: NDArray[np.bool_]) -> None:
+        """One event for each joint that became too fast this period."""
+        speed = self._limits.speed
+        for i in self._started("joint_speed", fast):
+            detail = f"joint {i + 1} speed {abs(qd[i]):.4g} rad/s above {speed[i]:.4g} rad/s"
+            self._log("joint_speed", f"{detail}: braking")
 
     def _tool_braking(
         self, jacobian: FloatArray, qd: FloatArray, mass: FloatArray
@@ -308,11 +371,16 @@ class SafetySupervisor:
         p = self.parameters
         limit = p.tool_speed_limit
         torque, speed = braking.tool_braking(jacobian, mass, qd, limit, p.braking_time)
+        self._log_tool_speed(speed)
+        return torque if speed > limit else None
+
+    def _log_tool_speed(self, speed: float) -> None:
+        """Keep the largest tool speed [m/s]; an event when it goes above the limit."""
+        limit = self.parameters.tool_speed_limit
         if speed > self.max_tool_speed:
             self.max_tool_speed = speed
         if self._began("tool_speed", speed > limit):
             self._log("tool_speed", f"tool speed {speed:.3g} m/s above {limit:.3g} m/s: braking")
-        return torque if speed > limit else None
 
     def _safe_stop(self, qd: object) -> FloatArray:
         """Gravity hold at the last good position, damped for the first part of the stop."""
