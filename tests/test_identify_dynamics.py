@@ -127,6 +127,8 @@ def test_a_current_log_is_torque_through_the_robots_constants(synthetic, nominal
     q = nominal.home() + 0.3
     expected = lt.Dynamics(from_torque).gravity(q)
     np.testing.assert_allclose(lt.Dynamics(from_current).gravity(q), expected, atol=1e-9)
+    np.testing.assert_allclose(prediction_error(as_current, nominal),
+                               prediction_error(log, nominal), atol=1e-9)  # fmt: skip
 
 
 @needs_realdata

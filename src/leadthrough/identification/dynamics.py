@@ -25,6 +25,7 @@ import numpy as np
 
 from leadthrough.errors import LeadthroughError
 from leadthrough.friction.model import FrictionModel
+from leadthrough.identification.prediction import log_torque
 from leadthrough.identification.regressor import (
     BLOCKS,
     described,
@@ -187,8 +188,7 @@ def _stacked_samples(
         if log.q.shape[1] != n or len(log.t) < 20:
             shape = f"{log.q.shape[1]} joints and {len(log.t)} samples"
             raise DynamicsIdentificationError(f"{where}: {shape}, expected {n} and ≥ 20")
-        tau = log.joint_torque(robot.torque_constants) if hasattr(log, "joint_torque") else (
-            getattr(log, "tau", None))  # fmt: skip
+        tau = log_torque(log, robot)
         if tau is None:
             raise DynamicsIdentificationError(f"{where}: no joint torque, and no motor "
                                               f"currents with {robot.name}'s torque "

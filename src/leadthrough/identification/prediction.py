@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from leadthrough.errors import ParameterError
 from leadthrough.friction.model import FrictionModel
 from leadthrough.identification.smoothing import smooth_derivative
 from leadthrough.model.description import FloatArray, RobotDescription
@@ -44,8 +45,24 @@ def prediction_error(
     bandwidth: float = BANDWIDTH,
 ) -> FloatArray:
     """Measured minus predicted torque in the log's torque units [Nm], (N, n)."""
+    measured = log_torque(log, robot)
+    if measured is None:
+        where = getattr(log, "source", "") or "the log"
+        raise ParameterError("log", f"{where} has no joint torque (nor currents with K)")
     predicted = predict_torque(log, robot, offset, bandwidth)
-    return np.asarray(log.tau, dtype=float) - gain_ratio(log, robot) * predicted
+    return measured - gain_ratio(log, robot) * predicted
+
+
+def log_torque(log: Any, robot: RobotDescription) -> FloatArray | None:
+    """The log's joint torque [Nm], (N, n): ``tau``, else K·i with ``robot``'s constants.
+
+    None when the log has neither (a log type without :meth:`JointLog.joint_torque`
+    gives its ``tau``).
+    """
+    if hasattr(log, "joint_torque"):
+        return log.joint_torque(robot.torque_constants)
+    tau = getattr(log, "tau", None)
+    return None if tau is None else np.asarray(tau, dtype=float)
 
 
 def gain_ratio(log: Any, robot: RobotDescription) -> FloatArray:
