@@ -1,0 +1,148 @@
+r"""Variants of active lead-through for ``guiding_quality.py --factory`` (issue 13 diagnosis).
+
+Each factory builds the default controller with one thing changed, so that the README's
+"why active mode is not lighter" figures can be reproduced on the same 56 cases::
+
+    PYTHONPATH=src:benchmarks python benchmarks/guiding_quality.py \
+        --factory guiding_variants:no_weighting
+
+Passive mode is always the default one (the denominator of every ratio). The variants are
+experiments, not alternatives: each makes guiding lighter or a band narrower and costs
+something the defaults keep (see README).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+
+import leadthrough as lt
+from leadthrough.control.admittance import operator_weight
+from leadthrough.control.calibration import CalibrationParameters
+from leadthrough.estimation.observer import MomentumObserver, ObserverParameters
+from observer_variants import SMOOTH_RATE
+
+#: A calibration that slides every joint 10 mrad at 0.1 rad/s (default 5 mrad, 0.05 rad/s).
+LONG_STROKE = {"stroke": 0.01, "speed": 0.1}
+
+
+def _build(
+    robot: lt.RobotDescription,
+    mode: str,
+    cls: type[lt.LeadThrough] = lt.LeadThrough,
+    calibration: dict[str, Any] | None = None,
+    dither: dict[str, Any] | None = None,
+    **fields: Any,
+) -> lt.LeadThrough:
+    """The default controller of ``mode``; in active mode with ``fields`` changed."""
+    parameters = lt.LeadThroughParameters()
+    if mode == "active":
+        changes = dict(fields)
+        if calibration:
+            changes["calibration"] = dataclasses.replace(CalibrationParameters(), **calibration)
+        if dither:
+            changes["dither"] = dataclasses.replace(parameters.dither, **dither)  # type: ignore[arg-type]
+        parameters = dataclasses.replace(parameters, **changes)
+        return cls(robot, mode=mode, dt=0.004, parameters=parameters, calibrate=True)
+    return lt.LeadThrough(robot, mode=mode, dt=0.004, parameters=parameters, calibrate=True)
+
+
+def no_weighting(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """``assist_knee = 0``: the whole residual drives, and the damping never rises."""
+    return _build(robot, mode, assist_knee=0.0)
+
+
+class _FullResidual(lt.LeadThrough):
+    """The weight sets the virtual damping only; the whole residual drives the admittance."""
+
+    compiled = False
+
+    def _update_drive(self, estimate: Any, q: Any, qd: Any, gravity: Any) -> None:
+        super()._update_drive(estimate, q, qd, gravity)
+        weighted = self._weight > 0.0
+        self._drive = np.where(weighted, self._drive / np.where(weighted, self._weight, 1.0), 0.0)
+
+
+def full_residual(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """The residual not attenuated by its weight (the damping still follows the weight)."""
+    return _build(robot, mode, cls=_FullResidual)
+
+
+def long_stroke(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """The start-up calibration with :data:`LONG_STROKE`."""
+    return _build(robot, mode, calibration=LONG_STROKE)
+
+
+def long_stroke_trusted(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """:func:`long_stroke`, its Coulomb levels trusted to 10 % (default 20 %)."""
+    return _build(robot, mode, calibration={**LONG_STROKE, "friction_accuracy": 0.1})
+
+
+def strong_dither(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """A dither of 0.6 τ_C on resting joints in active mode (default 0.3)."""
+    return _build(robot, mode, dither={"amplitude": 0.6})
+
+
+def drive_gain_on_gravity(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """Gravity error 15 % of its change (masses 5 % + drive gains 10 %), default 5 %."""
+    return _build(robot, mode, mass_uncertainty=0.15)
+
+
+class _OwnCalibrationObserver(lt.LeadThrough):
+    """Guides with its own observer; the calibration reads the default observer."""
+
+    def _build(self, robot: lt.RobotDescription, friction: lt.FrictionModel) -> None:
+        super()._build(robot, friction)
+        self._calibration_observer = MomentumObserver(self.dynamics, friction, self.dt,
+                                                      ObserverParameters())  # fmt: skip
+
+    def _calibrate(self, t: float, model: Any, tau_measured: Any) -> Any:
+        guiding = self.observer
+        self.observer = calibration = self._calibration_observer
+        try:
+            return super()._calibrate(t, model, tau_measured)
+        finally:
+            if self.observer is calibration:  # still calibrating, or the result refused
+                self.observer = guiding
+
+
+def smooth_rate_guiding(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """The ``"smooth_rate"`` observer while guiding; the calibration reads the default one."""
+    observer = dataclasses.replace(ObserverParameters(), **SMOOTH_RATE)  # type: ignore[arg-type]
+    return _build(robot, mode, cls=_OwnCalibrationObserver, observer=observer)
+
+
+class _ToolWrenchPrior(lt.LeadThrough):
+    """The operator torque as a posterior under ``τ_op ~ N(0, Jᵀ Σ_F J + σ_L² I)``.
+
+    The hand holds the tool (a wrench at the TCP, Σ_F: 30 N, 3 Nm) plus a little anywhere
+    else (σ_L = 0.1 Nm per joint); every joint reads ``τ_op`` plus model error of its own
+    uncertainty ``u``: a joint friction holds (large ``u``) gets its torque from the
+    joints that move. The weight compares the posterior mean with its posterior std.
+    """
+
+    compiled = False
+    prior = np.diag([30.0**2] * 3 + [3.0**2] * 3)
+    anywhere = 0.1
+
+    def _update_drive(self, estimate: Any, q: Any, qd: Any, gravity: Any) -> None:
+        super()._update_drive(estimate, q, qd, gravity)  # bias learning and the residual
+        p = self.parameters
+        weighted = self._weight > 0.0
+        residual = np.where(weighted, self._drive / np.where(weighted, self._weight, 1.0), 0.0)
+        uncertainty = (self._rest_tolerance + self.model_error.tolerance(gravity)
+                       + self.friction.coulomb_uncertainty(qd, q))  # fmt: skip
+        jacobian = self.model.tool_jacobian  # type: ignore[union-attr]
+        covariance = jacobian.T @ self.prior @ jacobian + self.anywhere**2 * np.eye(q.size)
+        gain = np.linalg.solve(covariance + np.diag(uncertainty**2), covariance).T
+        posterior = gain @ residual
+        std = np.sqrt(np.maximum(np.diag(covariance - gain @ covariance), 1e-24))
+        self._weight = operator_weight(posterior, std, p.assist_knee)
+        self._drive = posterior * self._weight
+
+
+def tool_wrench_prior(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """The operator torque read as a wrench at the tool (:class:`_ToolWrenchPrior`)."""
+    return _build(robot, mode, cls=_ToolWrenchPrior)
