@@ -13,6 +13,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+#: Every kernel defined, by name: ``signatures()`` reads what each has compiled.
+_KERNELS: dict[str, Callable[..., Any]] = {}
+
 
 def kernel(function: Callable[..., Any]) -> Callable[..., Any]:
     """``function`` compiled by ``numba.njit(cache=True)`` when it is first called.
@@ -30,6 +33,21 @@ def kernel(function: Callable[..., Any]) -> Callable[..., Any]:
             kernel = numba.njit(cache=True)(function)
         return kernel(*args)
 
+    def compiled() -> tuple[str, ...]:
+        return () if kernel is None else tuple(str(s) for s in kernel.signatures)  # type: ignore[attr-defined]
+
     call.py_func = function  # type: ignore[attr-defined]
+    call.compiled_signatures = compiled  # type: ignore[attr-defined]
     call.__doc__, call.__name__ = function.__doc__, function.__name__
+    _KERNELS[f"{function.__module__}.{function.__qualname__}"] = call
     return call
+
+
+def signatures() -> dict[str, tuple[str, ...]]:
+    """The argument types each kernel has been compiled (or loaded from the cache) for.
+
+    A kernel called with new argument types compiles again, there and then (a second or
+    more): :meth:`~leadthrough.LeadThrough.warm_up` makes sure a control loop finds every
+    kernel it will call already compiled.
+    """
+    return {name: call.compiled_signatures() for name, call in _KERNELS.items()}  # type: ignore[attr-defined]

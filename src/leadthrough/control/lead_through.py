@@ -46,6 +46,7 @@ from leadthrough.control.constraints import VirtualConstraint, constraint_torque
 from leadthrough.control.feedforward import DelayLine, FeedForwardTorques, PassiveFeedForward
 from leadthrough.control.fused import admittance_law, operator_drive
 from leadthrough.control.parameters import LeadThroughParameters, Mode
+from leadthrough.control.warm_up import exercise
 from leadthrough.errors import ParameterError, failure
 from leadthrough.estimation.observer import MomentumObserver
 from leadthrough.estimation.wrench import ToolWrench, tool_wrench
@@ -249,6 +250,23 @@ class LeadThrough:
             com: Its centre of mass in the flange frame [m].
         """
         self._build(self.robot.with_payload(mass, com), self.friction)
+
+    def warm_up(self) -> float:
+        """Compile every kernel the step will call, on a copy of this controller.
+
+        :func:`~leadthrough.runtime.loop.control_loop` calls it before the first sample, so
+        that no compilation (seconds) falls into a control period; nothing of this
+        controller changes (:mod:`~leadthrough.control.warm_up`): replicas guide, and
+        calibrate if this one will. Returns the time it took [s].
+        """
+        q, limits = self.robot.home(), self.robot.velocity_limits
+        return sum(exercise(self._replica(calibrate), q, limits)
+                   for calibrate in {False, self.calibrate})  # fmt: skip
+
+    def _replica(self, calibrate: bool) -> LeadThrough:
+        """A new controller built from this one's robot, friction, parameters, constraints."""
+        return LeadThrough(self.robot, self.mode, self.dt, self.nominal_friction,
+                           self.parameters, self.constraints, calibrate)  # fmt: skip
 
     # --- the control step --------------------------------------------------------------
 

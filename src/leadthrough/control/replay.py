@@ -17,6 +17,7 @@ from numpy.polynomial import polynomial
 from numpy.typing import ArrayLike
 
 from leadthrough.control.tracking import JointTracker
+from leadthrough.control.warm_up import exercise
 from leadthrough.errors import ParameterError, ReplayError, failure
 from leadthrough.friction.model import FrictionModel
 from leadthrough.logs.sample import JointState, joint_state
@@ -314,6 +315,15 @@ class Replayer:
         """Whether the path is over and its last pose has been held for 0.5 s."""
         end = self.parameters.approach_time + self.plan.duration + SETTLE_TIME
         return self.time >= end - 1e-9
+
+    def warm_up(self) -> float:
+        """Compile every kernel the step will call, on a replica; return the time [s].
+
+        See :meth:`LeadThrough.warm_up <leadthrough.LeadThrough.warm_up>`.
+        """
+        robot = self.dynamics.robot
+        replica = Replayer(self.plan, Dynamics(robot), self.friction, self.dt, self.parameters)
+        return exercise(replica, self.plan.q[0].copy(), robot.velocity_limits)
 
     def reference(self, t: float) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Reference (q [rad], q̇ [rad/s], q̈ [rad/s²]) at time ``t`` [s] since the first step."""

@@ -16,6 +16,8 @@ controller as it is (``step(state)``; a controller whose ``step`` takes (q, q̇,
 those), so the robot's clock is the controller's. A controller with a ``dt`` must run at
 the robot's period (a 4 ms controller on a 1 ms robot is refused).
 
+Before the first sample the controller's ``warm_up()`` (if it has one) compiles every
+kernel its step will call, on a copy of it, so that no compilation falls into a period.
 Each period the controller's compute time is measured, from the sample arriving to the
 command leaving; on a robot with a wall clock one longer than the period is a missed
 deadline, counted and logged by the controller's supervisor (``supervisor.record_cycle``).
@@ -73,6 +75,7 @@ class LoopReport:
         period: The control period [s].
         ended: ``"finished"`` (duration reached), ``"stopped"`` (``until`` said so) or
             what interrupted the loop.
+        warm_up: Time the controller's ``warm_up`` took before the first sample [s].
     """
 
     periods: int
@@ -81,6 +84,7 @@ class LoopReport:
     compute_max: float
     period: float
     ended: str
+    warm_up: float = 0.0
 
     @property
     def interrupted(self) -> bool:
@@ -134,8 +138,10 @@ def control_loop(
     supervisor: SafetySupervisor | None = getattr(controller, "supervisor", None)
     overruns_before = supervisor.overruns if supervisor is not None else 0
     compute = array("d")
-    ended, k, t = "finished", 0, None
+    ended, k, t, warmed = "finished", 0, None, 0.0
     try:
+        warm_up = getattr(controller, "warm_up", None)  # compile its kernels now, not in a period
+        warmed = float(warm_up()) if callable(warm_up) else 0.0
         state = robot.read_state()
         while periods is None or k < periods:
             t = state.t
@@ -164,7 +170,7 @@ def control_loop(
     times = np.frombuffer(compute, dtype=float) if compute else np.zeros(1)
     overruns = supervisor.overruns - overruns_before if supervisor is not None else 0
     return LoopReport(k, overruns, float(np.median(times)), float(times.max()), robot.dt,
-                      ended)  # fmt: skip
+                      ended, warmed)  # fmt: skip
 
 
 def check_period(controller: object, robot: RobotInterface) -> None:
