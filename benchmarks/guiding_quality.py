@@ -26,6 +26,7 @@ import sys
 import time
 
 from leadthrough.experiments.guiding import GOALS, cases, evaluate
+from leadthrough.model import robots
 
 HEADER = (f"{'case':<30}{'effort a/p':>11}{'vib a/p':>9}{'speed p|a':>12}"
           f"{'resid p|a N':>13}{'stop s':>8}{'drift mrad':>11}{'obs rms':>8}{'cov':>6}"
@@ -58,6 +59,7 @@ def print_summary(stats: dict[str, dict[str, float]], old: dict | None) -> None:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", choices=("full", "quick"), default="full")
+    parser.add_argument("--robot", default="yumi", help="a registered robot (default yumi)")
     parser.add_argument("--save", help="write the per-case figures and the summary to JSON")
     parser.add_argument("--compare", help="a JSON saved before: print its summary alongside")
     parser.add_argument(
@@ -81,7 +83,7 @@ def main(argv: list[str] | None = None) -> None:
 
     reported: list[str] = []
     print(HEADER)
-    results, stats = evaluate(args.cases, factory, report=report)
+    results, stats = evaluate(args.cases, factory, robots.load(args.robot), report=report)
     old = None
     if args.compare:
         with open(args.compare) as handle:
