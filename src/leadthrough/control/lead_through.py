@@ -227,6 +227,7 @@ class LeadThrough:
         self._feedback = np.zeros(n)  # the admittance's last tracking torque [Nm]
         self._references: AdmittanceState | None = None
         self._work = np.zeros((n, n + 1))  # the compiled admittance's scratch space
+        self._terms = np.zeros((4, n))  # the friction terms of the period (terms_into)
         self._sent = DelayLine((2, n), p.measurement_delay)  # (command, its dither) [Nm]
         self._own_clock = 0.0  # [s], for the positional form of step, which brings no time
         self._t = float("nan")
@@ -350,10 +351,13 @@ class LeadThrough:
         self.last_feed_forward = feed_forward
         applied, dither = self._measured(tau_measured)
         self._stage = "observer"
-        estimate = self.observer.update(q, qd, applied - dither, model)
+        terms = self.friction.terms_into(qd, q, self._terms)  # once for the period
+        estimate = self.observer.update(q, qd, applied - dither, model, terms)
         self._stage = "operator torque"
-        (self._compiled_drive if self.compiled else self._update_drive)(estimate, q, qd,
-                                                                         model.gravity)  # fmt: skip
+        if self.compiled:
+            self._compiled_drive(estimate, q, qd, model.gravity, terms)
+        else:
+            self._update_drive(estimate, q, qd, model.gravity)
         torque = feed_forward.total
         self._stage = "constraints"
         constraint, _ = constraint_torque(self.constraints, self.dynamics, q, qd, model)
@@ -367,10 +371,20 @@ class LeadThrough:
         return torque + active, feed_forward.dither
 
     def _compiled_drive(
-        self, estimate: FloatArray, q: FloatArray, qd: FloatArray, gravity: FloatArray
+        self,
+        estimate: FloatArray,
+        q: FloatArray,
+        qd: FloatArray,
+        gravity: FloatArray,
+        terms: FloatArray | None = None,
     ) -> None:
-        """:meth:`_update_drive` in one compiled pass (:func:`fused.operator_drive`)."""
-        bias, (level, viscous, upper, lower) = self.model_error, self.friction.sigmoid_terms(qd, q)
+        """:meth:`_update_drive` in one compiled pass (:func:`fused.operator_drive`).
+
+        ``terms``: the friction terms at (q̇, q) (``FrictionModel.terms_into``), if computed.
+        """
+        if terms is None:
+            terms = self.friction.terms_into(qd, q, self._terms)
+        bias, (level, viscous, upper, lower) = self.model_error, terms
         bias.confidence = operator_drive(estimate, q, gravity, level, viscous, upper, lower,
             self._joint_constants, self._drive_scalars, bias.bias, bias.gravity_learned,
             bias.confidence, self._weight, self._drive, self._feedback)  # fmt: skip

@@ -184,6 +184,7 @@ class MomentumObserver:
         self._previous_drift = np.zeros(n)  # read once initialised
         self._cov_rows = np.zeros((3, n))  # P11, P12, P22 per joint
         self._std = np.zeros(n)
+        self._terms = np.zeros((4, n))  # the friction terms of a period, when not given
         self.reset()
 
     # --- public state ------------------------------------------------------------------
@@ -212,7 +213,12 @@ class MomentumObserver:
     # --- the filter --------------------------------------------------------------------
 
     def update(
-        self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, model: ModelSnapshot | None = None
+        self,
+        q: ArrayLike,
+        qd: ArrayLike,
+        tau: ArrayLike,
+        model: ModelSnapshot | None = None,
+        terms: FloatArray | None = None,
     ) -> FloatArray:
         """One filter step with the state now and the motor torque of the last period.
 
@@ -222,6 +228,9 @@ class MomentumObserver:
             tau: Motor torque applied over the last period, arm side [Nm] (dither excluded).
             model: The model at (q, q̇) computed this period (M, G, Cᵀq̇), if the caller
                 has it; else computed here.
+            terms: The friction model's terms at (q̇, q) of this period, (4, n)
+                (:meth:`~leadthrough.friction.model.FrictionModel.terms_into`), if the
+                caller has them; else computed here.
 
         Returns:
             The estimated external torque [Nm].
@@ -232,11 +241,12 @@ class MomentumObserver:
         if self._initialised and self._levels is None and self._smooth is None and self.compiled:
             tau = self._input(tau)
             if qd.shape == q.shape == tau.shape:  # time-varying: one compiled pass
-                level, viscous, upper, lower = self.friction.sigmoid_terms(qd, q)
+                if terms is None:
+                    terms = self.friction.terms_into(qd, q, self._terms)
                 _time_varying_step(self._p, self._tau, self._previous_drift, self._cov_rows,
                                    self._std, tau, model.mass, qd, model.coriolis_drift,
-                                   model.gravity, level, viscous, upper, lower,
-                                   self.friction.noise_std, self._constants)  # fmt: skip
+                                   model.gravity, terms, self.friction.noise_std,
+                                   self._constants)  # fmt: skip
                 return self._tau.copy()
         momentum = model.mass @ qd
         if self._smooth is not None:
@@ -342,7 +352,7 @@ class MomentumObserver:
 
 @kernel
 def _time_varying_step(p, tau_hat, previous_drift, cov, std, tau, mass, qd, coriolis_drift,
-                       gravity, level, viscous, upper, lower, noise_std, constants):  # fmt: skip
+                       gravity, terms, noise_std, constants):  # fmt: skip
     """One step of the time-varying filter, all joints, in place (compiled, ~1 µs).
 
     The same arithmetic, in the same order, as :meth:`MomentumObserver.update` with
@@ -350,7 +360,8 @@ def _time_varying_step(p, tau_hat, previous_drift, cov, std, tau, mass, qd, cori
     hold this to): the momentum M q̇, the friction mean and std from the terms of
     :meth:`~leadthrough.friction.model.FrictionModel.sigmoid_terms` (as
     ``mean_and_std``), predict with the trapezoidal input, predict and update the 2×2
-    covariance with Q_m = scale · std_f², correct the state with the gains.
+    covariance with Q_m = scale · std_f², correct the state with the gains. ``terms``
+    are the friction terms, rows as :meth:`~leadthrough.friction.model.FrictionModel.terms_into`.
     """
     dt, scale, q11_torque, q12, q22, noise_d = constants
     n = p.shape[0]
@@ -358,9 +369,9 @@ def _time_varying_step(p, tau_hat, previous_drift, cov, std, tau, mass, qd, cori
         momentum = 0.0
         for j in range(n):
             momentum += mass[i, j] * qd[j]
-        half_level = 0.5 * level[i]
-        friction_mean = half_level * (upper[i] + lower[i]) + viscous[i]
-        friction_std = math.hypot(half_level * (upper[i] - lower[i]), noise_std[i])
+        half_level, upper, lower = 0.5 * terms[0, i], terms[2, i], terms[3, i]
+        friction_mean = half_level * (upper + lower) + terms[1, i]
+        friction_std = math.hypot(half_level * (upper - lower), noise_std[i])
         drift = coriolis_drift[i] - gravity[i] - friction_mean
         u = tau[i] + 0.5 * (drift + previous_drift[i])
         previous_drift[i] = drift
