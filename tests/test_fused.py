@@ -1,4 +1,4 @@
-"""Compiled active law (control/fused.py), feed-forward and friction terms equal their NumPy code."""
+"""Compiled active law (control/fused.py), feed-forward and friction terms equal NumPy code."""
 
 from __future__ import annotations
 

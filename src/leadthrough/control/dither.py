@@ -122,8 +122,10 @@ class Dither:
 
     @property
     def rest_since(self) -> FloatArray:
-        """When each joint came to rest [s since the first sample], NaN: moving (the array
-        itself: a compiled step updates it in place)."""
+        """When each joint came to rest [s since the first sample]; NaN: moving.
+
+        The array itself: a compiled step updates it in place.
+        """
         return self._rest_since
 
     @property

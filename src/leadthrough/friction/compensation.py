@@ -98,8 +98,10 @@ class CoulombCompensation:
 
     @property
     def filtered(self) -> FloatArray:
-        """The filter's state, the latest torque [Nm] (the array itself: a compiled step
-        updates it in place)."""
+        """The filter's state, the latest torque [Nm].
+
+        The array itself: a compiled step updates it in place.
+        """
         return self._torque
 
     def step(
