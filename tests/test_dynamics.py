@@ -232,3 +232,17 @@ def test_remembered_results_follow_q_and_cannot_be_corrupted(yumi, dyn):
     fresh = lt.Dynamics(yumi)
     np.testing.assert_array_equal(dyn.mass(q), fresh.mass(q))
     np.testing.assert_array_equal(dyn.gravity(q), fresh.gravity(q))
+
+
+def test_snapshot_equals_the_separate_model_calls(yumi, dyn):
+    """The compiled M and Cᵀq̇ of a snapshot equal mass() and the NumPy C.T @ q̇ (1e-12)."""
+    rng = np.random.default_rng(12)
+    for k in range(300):
+        q = rng.uniform(yumi.q_min, yumi.q_max)
+        qd = rng.normal(0.0, (0.01, 1.0, 5.0)[k % 3], 7)
+        snapshot = dyn.snapshot(q, qd)
+        np.testing.assert_array_equal(snapshot.mass, dyn.mass(q))
+        np.testing.assert_array_equal(snapshot.gravity, dyn.gravity(q))
+        np.testing.assert_allclose(snapshot.coriolis_drift, dyn.coriolis(q, qd).T @ qd,
+                                   rtol=1e-12, atol=1e-12)  # fmt: skip
+        np.testing.assert_array_equal(snapshot.tool_jacobian, dyn.tool_jacobian(q))

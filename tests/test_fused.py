@@ -1,4 +1,4 @@
-"""Compiled active law (control/fused.py), dither and compensation equal their NumPy code."""
+"""Compiled active law (control/fused.py), feed-forward and friction terms equal NumPy code."""
 
 from __future__ import annotations
 
@@ -8,10 +8,11 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from leadthrough.control.dither import Dither, DitherParameters
+from leadthrough.control.dither import DitherParameters
+from leadthrough.control.feedforward import PassiveFeedForward
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.control.parameters import LeadThroughParameters
-from leadthrough.friction.compensation import CoulombCompensation
+from leadthrough.estimation.observer import MomentumObserver
 from test_speed_reference import CASES
 
 PERIODS = 20000
@@ -128,49 +129,65 @@ def _velocities(rng: np.random.Generator, k: int, n: int) -> np.ndarray:
     return np.where(moving, rng.normal(0.0, 0.02, n), rng.normal(0.0, 1e-3, n))
 
 
-@pytest.mark.parametrize("park_time, clock", [(2.0, True), (None, True), (0.5, False)])
-def test_compiled_dither_equals_the_numpy_reference(park_time, clock):
-    """10 000 periods (rest, park, joints starting and stopping): same torque, same state."""
+def _feed_forward_run(parameters: DitherParameters | None, clock: bool, compiled: bool,
+                      delay: int | None) -> np.ndarray:  # fmt: skip
+    """Parts, total and dither state over 10 000 seeded periods (NaN speeds too)."""
     robot = lt.robots.yumi()
-    parameters = DitherParameters(park_time=park_time)
-    runs = []
-    for compiled in (True, False):
-        rng = np.random.default_rng(21)
-        dither = Dither(_cable(robot), 0.004, parameters)
-        dither.compiled = compiled
-        rows = []
-        for k in range(10000):
-            q = robot.home() + rng.normal(0.0, 0.5, 7)
-            torque = dither.step(_velocities(rng, k, 7), q, 1.7e9 + 0.004 * k if clock else None)
-            rows.append(np.concatenate([torque, dither.active, [dither.parked]]))
-        runs.append(np.array(rows))
-    assert 0.05 < np.mean(runs[1][:, 7:14]) < 0.95  # both decisions are taken
-    assert runs[1][:, -1].any() == (park_time is not None)
-    np.testing.assert_allclose(runs[0], runs[1], rtol=1e-12, atol=1e-12)
+    rng = np.random.default_rng(21)
+    feed_forward = PassiveFeedForward(lt.Dynamics(robot), _cable(robot), 0.004,
+                                      dither=parameters, measurement_delay=delay)  # fmt: skip
+    feed_forward.compiled = compiled
+    dither, rows = feed_forward.dither, []
+    for k in range(10000):
+        q = robot.home() + rng.normal(0.0, 0.5, 7)
+        qd = _velocities(rng, k, 7) * (1.0, 0.3)[k % 2]  # through the dead-band and the ramp
+        if k % 997 == 5:
+            qd[k % 7] = np.nan  # a NaN speed: moving, as in NumPy
+        parts = feed_forward.step(q, qd, None, 1.7e9 + 0.004 * k if clock else None)
+        state = [] if dither is None else [dither.active, [dither.parked]]
+        if delay is not None:
+            state.append(parts.dither_in_measurement)
+        rows.append(np.concatenate([parts.friction, parts.dither, parts.total, *state]))
+    return np.array(rows)
 
 
-def test_compiled_compensation_equals_the_numpy_reference():
-    """20 000 periods around the dead-band and ramp, default and per-joint bands: 1e-12."""
+@pytest.mark.parametrize(
+    "park_time, clock, dithered, delay",
+    [(2.0, True, True, None), (None, True, True, 2), (0.5, False, True, 1), (2.0, True, False, 2)],
+)
+def test_compiled_feed_forward_equals_the_numpy_reference(park_time, clock, dithered, delay):
+    """10 000 periods (rest, park, joints starting and stopping): same torques, same state."""
+    parameters = DitherParameters(park_time=park_time) if dithered else None
+    compiled = _feed_forward_run(parameters, clock, True, delay)
+    reference = _feed_forward_run(parameters, clock, False, delay)
+    if dithered:
+        assert 0.05 < np.mean(reference[:, 21:28]) < 0.95  # both decisions are taken
+        assert reference[:, 28].any() == (park_time is not None)
+    compensating = np.abs(reference[:, :7]) > 1e-9
+    assert 0.05 < np.mean(compensating) < 0.95  # both sides of the dead-band
+    np.testing.assert_allclose(compiled, reference, rtol=1e-12, atol=1e-12, equal_nan=True)
+
+
+def test_compiled_friction_terms_equal_sigmoid_terms():
+    """Random (q̇, q) with NaN, beyond the span, cable and plain models: equal to 1e-12."""
     robot = lt.robots.yumi()
-    runs = []
-    for compiled in (True, False):
-        rng = np.random.default_rng(22)
-        compensation = CoulombCompensation(_cable(robot), dt=0.004)
-        compensation.compiled = compiled
-        rows = []
-        for k in range(20000):
-            qd = rng.normal(0.0, (0.002, 0.006, 0.02, 1.0)[k % 4], 7)
-            band = None if k % 3 else rng.choice([0.003, 0.01, 0.02], 7)
-            q = robot.home() + rng.normal(0.0, 0.5, 7)
-            rows.append(compensation.step(qd, q, band))
-        runs.append(np.array(rows))
-    np.testing.assert_allclose(runs[0], runs[1], rtol=1e-12, atol=1e-12)
+    rng = np.random.default_rng(23)
+    for friction in (lt.FrictionModel.from_robot(robot), _cable(robot)):
+        out = np.zeros((4, 7))
+        for k in range(5000):
+            qd = rng.normal(0.0, (1e-3, 0.05, 2.0)[k % 3], 7)
+            q = rng.uniform(robot.q_min - 1.0, robot.q_max + 1.0)
+            if k % 50 == 0:
+                (qd if k % 100 else q)[k % 7] = np.nan
+            expected = np.array(friction.sigmoid_terms(qd.copy(), q.copy()))
+            np.testing.assert_allclose(friction.terms_into(qd, q, out), expected, rtol=1e-12,
+                                       atol=1e-12, equal_nan=True)  # fmt: skip
 
 
 @pytest.mark.parametrize("case", [name for name in CASES if not name.startswith("twin")])
 def test_steps_with_the_numpy_law_equal_the_compiled_one(case, monkeypatch):
     """Whole steps (modes, calibration, constraints, a fault, the Panda): equal to 1e-12."""
     compiled = CASES[case]()
-    for component in (LeadThrough, Dither, CoulombCompensation):
+    for component in (LeadThrough, PassiveFeedForward, MomentumObserver):
         monkeypatch.setattr(component, "compiled", False)
     np.testing.assert_allclose(compiled, CASES[case](), rtol=1e-12, atol=1e-12, equal_nan=True)

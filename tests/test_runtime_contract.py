@@ -12,7 +12,7 @@ from leadthrough.control.constraints import Plane, constraint_torque
 from leadthrough.control.dither import DitherParameters
 from leadthrough.control.parameters import LeadThroughParameters
 from leadthrough.errors import ParameterError
-from leadthrough.friction.model import FrictionModel
+from leadthrough.estimation.observer import MomentumObserver
 from leadthrough.runtime.interface import JointState, RobotInterface
 from leadthrough.runtime.recording import read_recording
 from leadthrough.runtime.teaching import teach
@@ -107,10 +107,10 @@ def test_an_exception_inside_the_step_is_named_and_the_arm_stopped_that_period(m
     q = ROBOT.home()
     controller.step(q, np.zeros(N))
 
-    def broken(self, qd, q=None):
+    def broken(self, tau):
         raise IndexError("index 9 is out of bounds for axis 0 with size 7")
 
-    monkeypatch.setattr(FrictionModel, "sigmoid_terms", broken)
+    monkeypatch.setattr(MomentumObserver, "_input", broken)
     qd = np.full(N, 0.05)
     command = controller.step(q, qd)
     reason = controller.supervisor.fault_reason
@@ -140,9 +140,9 @@ def test_one_delay_line_for_the_command_and_its_dither(monkeypatch, delay):
     controller = lt.LeadThrough(ROBOT, "passive", parameters=parameters)
     seen, update = [], controller.observer.update
 
-    def spying(q, qd, tau, model=None):
+    def spying(q, qd, tau, model=None, terms=None):
         seen.append(tau)
-        return update(q, qd, tau, model)
+        return update(q, qd, tau, model, terms)
 
     monkeypatch.setattr(controller.observer, "update", spying)
     q, commands, dithers = ROBOT.home(), [], []

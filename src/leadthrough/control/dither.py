@@ -16,7 +16,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from leadthrough.compiled import kernel
 from leadthrough.errors import ParameterError
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray
@@ -71,10 +70,6 @@ class Dither:
         parameters: Dither settings.
     """
 
-    #: Run :meth:`step` compiled (:func:`_dither_step`); False runs the readable NumPy
-    #: reference, which the tests compare it to.
-    compiled = True
-
     def __init__(
         self, friction: FrictionModel, dt: float, parameters: DitherParameters | None = None
     ) -> None:
@@ -109,15 +104,12 @@ class Dither:
         """
         return np.asarray(elapsed + self.dt >= duration - 0.5 * self.dt, dtype=bool)
 
-    def step(self, qd: ArrayLike, q: ArrayLike | None = None, t: float | None = None) -> FloatArray:
-        """Dither torque [Nm] for this period, zero on moving joints.
+    def clock(self, t: float | None) -> tuple[float, float]:
+        """Advance the clock to the sample at ``t`` [s]: (time since the first sample [s], wave).
 
-        Args:
-            qd: Joint velocities [rad/s].
-            q: Joint readings [rad] (for position-dependent Coulomb levels).
-            t: Time of the sample [s], any origin (a robot's Unix clock included).
+        The wave is ±1, the square wave's sign; without ``t`` the dither counts its own
+        periods of ``dt``.
         """
-        p = self.parameters
         if t is None:
             t = self._periods * self.dt
             self._periods += 1
@@ -125,18 +117,43 @@ class Dither:
             self._start = float(t)
         now = self._now = float(t) - self._start  # small numbers: a Unix clock loses nothing
         # a sample on an edge (within 1e-4 half-period: clock rounding) starts the new half
-        wave = 1.0 if math.floor(2.0 * p.frequency * now + 1e-4) % 2 == 0 else -1.0
-        velocity = np.asarray(qd, dtype=float)
-        if self.compiled and math.isfinite(now) and velocity.shape == self.active.shape:
-            level, dither = self.friction.coulomb_level(q), np.zeros(velocity.shape)
-            park_time = math.inf if p.park_time is None else p.park_time
-            quiet = math.nan if self._quiet_since is None else self._quiet_since
-            quiet = _dither_step(velocity, level, self._rest_since, self.active, dither, now,
-                                 quiet, p.moving_velocity, p.rest_time, park_time, self.dt,
-                                 wave * p.amplitude)  # fmt: skip
-            self._quiet_since = None if math.isnan(quiet) else quiet
-            return dither
-        still = np.abs(velocity) < p.moving_velocity
+        frequency = self.parameters.frequency
+        return now, (1.0 if math.floor(2.0 * frequency * now + 1e-4) % 2 == 0 else -1.0)
+
+    @property
+    def rest_since(self) -> FloatArray:
+        """When each joint came to rest [s since the first sample]; NaN: moving.
+
+        The array itself: a compiled step updates it in place.
+        """
+        return self._rest_since
+
+    @property
+    def quiet_since(self) -> float:
+        """When every joint came to rest [s since the first sample]; NaN: a joint moves."""
+        return math.nan if self._quiet_since is None else self._quiet_since
+
+    @quiet_since.setter
+    def quiet_since(self, value: float) -> None:
+        self._quiet_since = None if math.isnan(value) else value
+
+    def step(self, qd: ArrayLike, q: ArrayLike | None = None, t: float | None = None) -> FloatArray:
+        """Dither torque [Nm] for this period, zero on moving joints.
+
+        The readable form; :class:`~leadthrough.control.feedforward.PassiveFeedForward`
+        runs the same decisions compiled, with the friction compensation.
+
+        Args:
+            qd: Joint velocities [rad/s].
+            q: Joint readings [rad] (for position-dependent Coulomb levels).
+            t: Time of the sample [s], any origin (a robot's Unix clock included).
+        """
+        return self.decide(qd, q, *self.clock(t))
+
+    def decide(self, qd: ArrayLike, q: ArrayLike | None, now: float, wave: float) -> FloatArray:
+        """:meth:`step` after the clock (:meth:`clock`): which joints dither, and how much [Nm]."""
+        p = self.parameters
+        still = np.abs(np.asarray(qd, dtype=float)) < p.moving_velocity
         # at rest since then (−inf: long enough already); NaN while moving
         self._rest_since = np.where(still, np.fmin(self._rest_since, now), np.nan)
         if np.count_nonzero(still) != still.size:  # a joint moves (count: 4× np.all's speed)
@@ -146,33 +163,3 @@ class Dither:
         rested = self._lasted(now - self._rest_since, p.rest_time)
         self.active = rested if not self.parked else np.zeros_like(rested)
         return np.where(self.active, wave * p.amplitude * self.friction.coulomb_level(q), 0.0)
-
-
-@kernel
-def _dither_step(qd, level, rest_since, active, dither, now, quiet_since, moving_velocity,
-                 rest_time, park_time, dt, amplitude):  # fmt: skip
-    """:meth:`Dither.step` after the clock, in place; returns the new ``_quiet_since``.
-
-    The same decisions as the NumPy reference: rest times (``np.fmin``, NaN while moving),
-    the park (``quiet_since`` NaN: not every joint rests; ``park_time`` inf: never), the
-    rested joints and their dither ``amplitude · τ_C(q)`` [Nm] (``amplitude`` signed by the
-    wave). Each "lasted" test is ``elapsed + dt >= duration − dt / 2``.
-    """
-    n = qd.shape[0]
-    every_joint_rests = True
-    for i in range(n):
-        if abs(qd[i]) < moving_velocity:
-            since = rest_since[i]
-            rest_since[i] = now if since != since or now < since else since  # np.fmin
-        else:
-            rest_since[i], every_joint_rests = math.nan, False
-    if not every_joint_rests:
-        quiet_since = math.nan
-    elif quiet_since != quiet_since:
-        quiet_since = now
-    parked = (now - quiet_since) + dt >= park_time - 0.5 * dt  # False for NaN and inf
-    for i in range(n):
-        on = (now - rest_since[i]) + dt >= rest_time - 0.5 * dt and not parked
-        active[i] = on
-        dither[i] = amplitude * level[i] if on else 0.0
-    return quiet_since

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from leadthrough.compiled import kernel
 from leadthrough.control.dither import Dither, DitherParameters
 from leadthrough.errors import ParameterError
 from leadthrough.friction.compensation import CoulombCompensation, CoulombCompensationParameters
@@ -103,14 +106,19 @@ class FeedForwardTorques:
     dither: FloatArray
     dither_in_measurement: FloatArray | None
 
-    @property
+    @cached_property
     def total(self) -> FloatArray:
-        """Sum of the parts: gravity + friction + dither."""
+        """Sum of the parts: gravity + friction + dither (a compiled step fills it in)."""
         return self.gravity + self.friction + self.dither
 
 
 class PassiveFeedForward:
     """Passive lead-through feed-forward: ``τ_ff = G(q) + τ_fc(q̇) + dither`` (§4.2, §5.3).
+
+    A period is one compiled pass (:func:`_feed_forward_step`: the dither's decisions and
+    torque, the widened dead-band, the filtered compensation and the sum); with
+    ``compiled = False`` it is the readable NumPy code of :class:`Dither` and
+    :class:`CoulombCompensation`, which the tests hold it to.
 
     Args:
         dynamics: Model of the arm.
@@ -124,6 +132,9 @@ class PassiveFeedForward:
             k is applied over the next period and measured at step k + 2. None: the caller
             keeps the delay line (``dither_in_measurement`` is then None).
     """
+
+    #: Run :meth:`step` compiled (:func:`_feed_forward_step`); False runs the NumPy reference.
+    compiled = True
 
     def __init__(
         self,
@@ -140,6 +151,15 @@ class PassiveFeedForward:
         self.dither = None if dither is None else Dither(self.friction, dt, dither)
         n = dynamics.n
         self._sent = None if measurement_delay is None else DelayLine((n,), measurement_delay)
+        law, dither_settings = self.compensation.parameters, self.dither and self.dither.parameters
+        park_time = dither_settings and dither_settings.park_time
+        self._scalars = np.array([  # FEED_FORWARD_SCALARS
+            dither_settings.moving_velocity if dither_settings else law.dead_band,
+            dither_settings.rest_time if dither_settings else 0.0,
+            math.inf if park_time is None else park_time, dt, law.dead_band, law.fraction,
+            law.full_velocity, self.compensation.pole])  # fmt: skip
+        self._no_rest = np.full(n, np.nan)  # the dither's state when there is no dither
+        self._no_active = np.zeros(n, dtype=bool)
 
     def reset(self) -> None:
         """Forget filter, dither and delay-line states."""
@@ -165,18 +185,102 @@ class PassiveFeedForward:
             t: Time of the sample [s] (the dither's clock); default: the dither counts
                 its own periods.
         """
-        q = np.asarray(q, dtype=float)
+        q, velocity = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
+        gravity = self.dynamics.gravity(q) if model is None else model.gravity
+        dither = self.dither
+        now, wave = (0.0, 0.0) if dither is None else dither.clock(t)
+        if not (self.compiled and math.isfinite(now) and velocity.shape == gravity.shape
+                and q.shape == gravity.shape):  # fmt: skip
+            return self._numpy_step(q, velocity, gravity, now, wave)
+        parts = np.empty((3, gravity.shape[0]))  # friction, dither, total
+        compensation = self.compensation
+        level = compensation.friction.coulomb_level(q)
+        if dither is None:
+            _feed_forward_step(velocity, level, gravity, self._no_rest, self._no_active,
+                               compensation.filtered, parts, False, 0.0, math.nan, 0.0,
+                               self._scalars)  # fmt: skip
+        else:
+            amplitude = wave * dither.parameters.amplitude
+            dither.quiet_since = _feed_forward_step(velocity, level, gravity, dither.rest_since,
+                dither.active, compensation.filtered, parts, True, now, dither.quiet_since,
+                amplitude, self._scalars)  # fmt: skip
+        torques = FeedForwardTorques(gravity, parts[0], parts[1], self._measured(parts[1]))
+        torques.__dict__["total"] = parts[2]  # the cached sum, computed by the kernel
+        return torques
+
+    def _numpy_step(
+        self, q: FloatArray, qd: FloatArray, gravity: FloatArray, now: float, wave: float
+    ) -> FeedForwardTorques:
+        """:meth:`step` with the NumPy code of :class:`Dither` and :class:`CoulombCompensation`."""
         if self.dither is None:
             dither, dead_band = np.zeros(self.dynamics.n), None
         else:
-            dither = self.dither.step(qd, q, t)
+            dither = self.dither.decide(qd, q, now, wave)
             base = self.compensation.parameters.dead_band
             dead_band = np.where(self.dither.active, self.dither.parameters.moving_velocity, base)
-        in_measurement = None
-        if self._sent is not None:
-            in_measurement = self._sent.measured
-            self._sent.push(dither)
-        gravity = self.dynamics.gravity(q) if model is None else model.gravity
         # (gravity, friction, dither, dither_in_measurement), positional: the cheaper call
         return FeedForwardTorques(gravity, self.compensation.step(qd, q, dead_band), dither,
-                                  in_measurement)  # fmt: skip
+                                  self._measured(dither))  # fmt: skip
+
+    def _measured(self, dither: FloatArray) -> FloatArray | None:
+        """The dither the measured torque holds now, after recording this period's."""
+        if self._sent is None:
+            return None
+        in_measurement = self._sent.measured
+        self._sent.push(dither)
+        return in_measurement
+
+
+#: Scalars of :func:`_feed_forward_step`, in order (``park_time`` inf: never parks).
+FEED_FORWARD_SCALARS = ("moving_velocity", "rest_time", "park_time", "dt", "dead_band",
+                        "fraction", "full_velocity", "pole")  # fmt: skip
+
+
+@kernel
+def _feed_forward_step(qd, level, gravity, rest_since, active, filtered, parts, dithering, now,
+                       quiet_since, amplitude, scalars):  # fmt: skip
+    """One period of :class:`PassiveFeedForward`, in place; returns the new ``quiet_since``.
+
+    The same decisions and arithmetic, in the same order, as the NumPy reference
+    (:meth:`Dither.decide`, the dead-band widened on the dithered joints, then
+    :meth:`CoulombCompensation.step`): rest times (``np.fmin``, NaN while moving), the
+    park (``quiet_since`` NaN: not every joint rests; ``park_time`` inf: never), the
+    rested joints and their dither ``amplitude · τ_C(q)`` [Nm] (``amplitude`` signed by
+    the wave), each "lasted" test ``elapsed + dt >= duration − dt / 2``; the compensation
+    ramp ends at ``max(q̇₁, 2 q̇₀)``, then the low-pass filter. ``parts`` gets the rows
+    friction, dither and gravity + friction + dither [Nm]. Without ``dithering`` the
+    dither state is not touched and the dead-band is q̇₀ on every joint.
+    """
+    moving_velocity, rest_time, park_time, dt = scalars[0], scalars[1], scalars[2], scalars[3]
+    dead_band, fraction, full_velocity, pole = scalars[4], scalars[5], scalars[6], scalars[7]
+    n = qd.shape[0]
+    if dithering:
+        every_joint_rests = True
+        for i in range(n):
+            if abs(qd[i]) < moving_velocity:
+                since = rest_since[i]
+                rest_since[i] = now if since != since or now < since else since  # np.fmin
+            else:
+                rest_since[i], every_joint_rests = math.nan, False
+        if not every_joint_rests:
+            quiet_since = math.nan
+        elif quiet_since != quiet_since:
+            quiet_since = now
+        parked = (now - quiet_since) + dt >= park_time - 0.5 * dt  # False for NaN and inf
+        for i in range(n):
+            active[i] = (now - rest_since[i]) + dt >= rest_time - 0.5 * dt and not parked
+    for i in range(n):
+        on = dithering and active[i]
+        dither = amplitude * level[i] if on else 0.0
+        band = moving_velocity if on else dead_band
+        full = 2.0 * band
+        full = full if full > full_velocity or full != full else full_velocity
+        ramp = (abs(qd[i]) - band) / (full - band)
+        ramp = ramp if ramp > 0.0 or ramp != ramp else 0.0
+        ramp = ramp if ramp < 1.0 or ramp != ramp else 1.0
+        sign = 1.0 if qd[i] > 0.0 else (-1.0 if qd[i] < 0.0 else qd[i])  # np.sign (NaN, ±0)
+        raw = ramp * sign * fraction * level[i]
+        filtered[i] = pole * filtered[i] + (1.0 - pole) * raw
+        parts[0, i], parts[1, i] = filtered[i], dither
+        parts[2, i] = gravity[i] + filtered[i] + dither
+    return quiet_since

@@ -228,6 +228,9 @@ class LeadThrough:
         self._feedback = np.zeros(n)  # the admittance's last tracking torque [Nm]
         self._references: AdmittanceState | None = None
         self._work = np.zeros((n, n + 1))  # the compiled admittance's scratch space
+        self._terms = np.zeros((4, n))  # the friction terms of the period (terms_into)
+        self._term_rows = tuple(self._terms)  # its rows (views), for the compiled drive
+        self._no_constraint = np.zeros(n)  # the constraint torque without constraints [Nm]
         self._sent = DelayLine((2, n), p.measurement_delay)  # (command, its dither) [Nm]
         self._own_clock = 0.0  # [s], for the positional form of step, which brings no time
         self._t = float("nan")
@@ -290,21 +293,23 @@ class LeadThrough:
         and the component it came from, and the safe stop is returned this period.
         """
         t, q, qd, tau_measured = self._sample(state, qd, tau_measured)
-        supervisor, zeros = self.supervisor, np.zeros(self.robot.n_joints)
+        supervisor = self.supervisor
         if not supervisor.check(t, q, qd, tau_measured):
+            zeros = np.zeros(self.robot.n_joints)
             return self._send(supervisor.command(t, q, qd, zeros), zeros)
         try:
             self._stage = "model"
             self.model = model = self.dynamics.snapshot(q, qd)
             tau = None if tau_measured is None else np.asarray(tau_measured, dtype=float)
             if self._calibrating:
-                desired, dither = self._calibrate(t, model, tau), zeros
+                desired, dither = self._calibrate(t, model, tau), np.zeros(self.robot.n_joints)
             else:
                 desired, dither = self._control(t, model, tau)
             self._stage = "supervisor"
             command = supervisor.command(t, q, qd, desired, model)
         except Exception as error:  # the safe stop this period, and the fault says what failed
             supervisor.stop(failure(self._stage, error), t)
+            zeros = np.zeros(self.robot.n_joints)
             command, dither = supervisor.command(t, q, qd, zeros), zeros
         return self._send(command, dither)
 
@@ -368,15 +373,20 @@ class LeadThrough:
         self.last_feed_forward = feed_forward
         applied, dither = self._measured(tau_measured)
         self._stage = "observer"
-        estimate = self.observer.update(q, qd, applied - dither, model)
+        terms = self.friction.terms_into(qd, q, self._terms)  # once for the period
+        estimate = self.observer.update(q, qd, applied - dither, model, terms)
         self._stage = "operator torque"
-        (self._compiled_drive if self.compiled else self._update_drive)(estimate, q, qd,
-                                                                         model.gravity)  # fmt: skip
+        if self.compiled:
+            self._compiled_drive(estimate, q, qd, model.gravity, terms)
+        else:
+            self._update_drive(estimate, q, qd, model.gravity)
         torque = feed_forward.total
         self._stage = "constraints"
-        constraint, _ = constraint_torque(self.constraints, self.dynamics, q, qd, model)
+        constraint = self._no_constraint
+        if self.constraints:
+            constraint, _ = constraint_torque(self.constraints, self.dynamics, q, qd, model)
         if self.mode == "passive":
-            return torque + constraint, feed_forward.dither
+            return (torque + constraint if self.constraints else torque), feed_forward.dither
         self._stage = "admittance"
         if self.compiled:
             active = self._compiled_admittance(q, qd, constraint, model.mass)
@@ -385,10 +395,21 @@ class LeadThrough:
         return torque + active, feed_forward.dither
 
     def _compiled_drive(
-        self, estimate: FloatArray, q: FloatArray, qd: FloatArray, gravity: FloatArray
+        self,
+        estimate: FloatArray,
+        q: FloatArray,
+        qd: FloatArray,
+        gravity: FloatArray,
+        terms: FloatArray | None = None,
     ) -> None:
-        """:meth:`_update_drive` in one compiled pass (:func:`fused.operator_drive`)."""
-        bias, (level, viscous, upper, lower) = self.model_error, self.friction.sigmoid_terms(qd, q)
+        """:meth:`_update_drive` in one compiled pass (:func:`fused.operator_drive`).
+
+        ``terms``: the friction terms at (q̇, q) (``FrictionModel.terms_into``), if computed.
+        """
+        if terms is None:
+            terms = self.friction.terms_into(qd, q, self._terms)
+        rows = self._term_rows if terms is self._terms else tuple(terms)
+        bias, (level, viscous, upper, lower) = self.model_error, rows
         bias.confidence = operator_drive(estimate, q, gravity, level, viscous, upper, lower,
             self._joint_constants, self._drive_scalars, bias.bias, bias.gravity_learned,
             bias.confidence, self._weight, self._drive, self._feedback)  # fmt: skip

@@ -171,7 +171,11 @@ class MomentumObserver:
             white = parameters.friction_noise_scale * self.friction.noise_std**2 * self.dt
             self._smooth = SmoothRateFilter(white, parameters.torque_rate_noise,
                                             parameters.measurement_noise, self.dt)  # fmt: skip
-        self._p, self._tau = np.zeros(n), np.zeros(n)
+        # the filter's state, one array (one argument of the compiled step), rows: p, τ̂_ext,
+        # the previous drift, the covariances P11, P12, P22 and the std of τ̂_ext
+        self._filter = np.zeros((7, n))
+        self._p, self._tau, self._previous_drift = self._filter[0], self._filter[1], self._filter[2]
+        self._cov_rows, self._std = self._filter[3:6], self._filter[6]
         # the entries of Q_d that do not depend on Q_m (Q_m enters Q₁₁ as Q_m dt)
         self._q11_torque, self._q12, self._q22 = process_noise(
             np.zeros(n), parameters.torque_noise, self.dt
@@ -181,9 +185,7 @@ class MomentumObserver:
         self._constants = np.array([self.dt, parameters.friction_noise_scale,
                                     self._q11_torque[0] if n else 0.0, self._q12[0] if n else 0.0,
                                     self._q22[0] if n else 0.0, self._noise_d])  # fmt: skip
-        self._previous_drift = np.zeros(n)  # read once initialised
-        self._cov_rows = np.zeros((3, n))  # P11, P12, P22 per joint
-        self._std = np.zeros(n)
+        self._terms = np.zeros((4, n))  # the friction terms of a period, when not given
         self.reset()
 
     # --- public state ------------------------------------------------------------------
@@ -212,7 +214,12 @@ class MomentumObserver:
     # --- the filter --------------------------------------------------------------------
 
     def update(
-        self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, model: ModelSnapshot | None = None
+        self,
+        q: ArrayLike,
+        qd: ArrayLike,
+        tau: ArrayLike,
+        model: ModelSnapshot | None = None,
+        terms: FloatArray | None = None,
     ) -> FloatArray:
         """One filter step with the state now and the motor torque of the last period.
 
@@ -222,6 +229,9 @@ class MomentumObserver:
             tau: Motor torque applied over the last period, arm side [Nm] (dither excluded).
             model: The model at (q, q̇) computed this period (M, G, Cᵀq̇), if the caller
                 has it; else computed here.
+            terms: The friction model's terms at (q̇, q) of this period, (4, n)
+                (:meth:`~leadthrough.friction.model.FrictionModel.terms_into`), if the
+                caller has them; else computed here.
 
         Returns:
             The estimated external torque [Nm].
@@ -232,11 +242,11 @@ class MomentumObserver:
         if self._initialised and self._levels is None and self._smooth is None and self.compiled:
             tau = self._input(tau)
             if qd.shape == q.shape == tau.shape:  # time-varying: one compiled pass
-                level, viscous, upper, lower = self.friction.sigmoid_terms(qd, q)
-                _time_varying_step(self._p, self._tau, self._previous_drift, self._cov_rows,
-                                   self._std, tau, model.mass, qd, model.coriolis_drift,
-                                   model.gravity, level, viscous, upper, lower,
-                                   self.friction.noise_std, self._constants)  # fmt: skip
+                if terms is None:
+                    terms = self.friction.terms_into(qd, q, self._terms)
+                _time_varying_step(self._filter, tau, model.mass, qd, model.coriolis_drift,
+                                   model.gravity, terms, self.friction.noise_std,
+                                   self._constants)  # fmt: skip
                 return self._tau.copy()
         momentum = model.mass @ qd
         if self._smooth is not None:
@@ -247,19 +257,19 @@ class MomentumObserver:
             friction_mean, friction_std = self.friction.mean(qd, q), None
         if not self._initialised:
             self._p[:] = momentum
-            self._previous_drift = model.coriolis_drift - model.gravity - friction_mean
+            self._previous_drift[:] = model.coriolis_drift - model.gravity - friction_mean
             self._initialised = True
             return self.tau_ext_hat
         tau = self._input(tau)
         drift = model.coriolis_drift - model.gravity - friction_mean
         # input over the last period: measured torque plus the drift terms (trapezoid)
         u = tau + 0.5 * (drift + self._previous_drift)
-        self._previous_drift = drift
+        self._previous_drift[:] = drift
         prior_p = self._p + self.dt * (u + self._tau)
         innovation = momentum - prior_p
         gain_p, gain_tau = self._gains(qd, friction_std)
-        self._p = prior_p + gain_p * innovation
-        self._tau = self._tau + gain_tau * innovation
+        self._p[:] = prior_p + gain_p * innovation
+        self._tau[:] = self._tau + gain_tau * innovation
         return self.tau_ext_hat
 
     def _smooth_rate_update(
@@ -277,12 +287,12 @@ class MomentumObserver:
         else:
             self._p[:] = momentum
             self._initialised = True
-        self._previous_drift = drift
+        self._previous_drift[:] = drift
         # v_C² from std_f² = v_C² + σ_f² (one evaluation of the friction model)
         coulomb_variance = np.maximum(friction_std**2 - self.friction.noise_std**2, 0.0)
         considered = consider_variance(friction_mean, coulomb_variance,
                                        self.friction.relative_error)  # fmt: skip
-        self._std = np.sqrt(self._smooth.torque_variance + considered)
+        self._std[:] = np.sqrt(self._smooth.torque_variance + considered)
         return self.tau_ext_hat
 
     def _input(self, tau: ArrayLike) -> FloatArray:
@@ -298,7 +308,7 @@ class MomentumObserver:
         if self._levels is not None:
             moving = np.abs(qd) > self._levels["threshold"]
             levels = self._levels
-            self._std = np.where(moving, levels["std_moving"], levels["std_still"])
+            self._std[:] = np.where(moving, levels["std_moving"], levels["std_still"])
             return (np.where(moving, levels["k1_moving"], levels["k1_still"]),
                     np.where(moving, levels["k2_moving"], levels["k2_still"]))  # fmt: skip
         assert friction_std is not None  # computed whenever the gains are not two-level
@@ -317,8 +327,8 @@ class MomentumObserver:
         k1 = prior11 / (prior11 + self._noise_d)
         k2 = prior12 / (prior11 + self._noise_d)
         keep = 1.0 - k1
-        self._cov_rows = np.array([keep * prior11, keep * prior12, prior22 - k2 * prior12])
-        self._std = np.sqrt(self._cov_rows[2])
+        self._cov_rows[:] = np.array([keep * prior11, keep * prior12, prior22 - k2 * prior12])
+        self._std[:] = np.sqrt(self._cov_rows[2])
         return k1, k2
 
     def _two_level_gains(self) -> dict[str, FloatArray]:
@@ -341,8 +351,8 @@ class MomentumObserver:
 
 
 @kernel
-def _time_varying_step(p, tau_hat, previous_drift, cov, std, tau, mass, qd, coriolis_drift,
-                       gravity, level, viscous, upper, lower, noise_std, constants):  # fmt: skip
+def _time_varying_step(state, tau, mass, qd, coriolis_drift, gravity, terms, noise_std,
+                       constants):  # fmt: skip
     """One step of the time-varying filter, all joints, in place (compiled, ~1 µs).
 
     The same arithmetic, in the same order, as :meth:`MomentumObserver.update` with
@@ -350,17 +360,20 @@ def _time_varying_step(p, tau_hat, previous_drift, cov, std, tau, mass, qd, cori
     hold this to): the momentum M q̇, the friction mean and std from the terms of
     :meth:`~leadthrough.friction.model.FrictionModel.sigmoid_terms` (as
     ``mean_and_std``), predict with the trapezoidal input, predict and update the 2×2
-    covariance with Q_m = scale · std_f², correct the state with the gains.
+    covariance with Q_m = scale · std_f², correct the state with the gains. ``state``
+    is ``MomentumObserver._filter`` (rows p, τ̂_ext, previous drift, P11, P12, P22, std), ``terms``
+    are the friction terms, rows as :meth:`~leadthrough.friction.model.FrictionModel.terms_into`.
     """
     dt, scale, q11_torque, q12, q22, noise_d = constants
+    p, tau_hat, previous_drift, cov, std = state[0], state[1], state[2], state[3:6], state[6]
     n = p.shape[0]
     for i in range(n):
         momentum = 0.0
         for j in range(n):
             momentum += mass[i, j] * qd[j]
-        half_level = 0.5 * level[i]
-        friction_mean = half_level * (upper[i] + lower[i]) + viscous[i]
-        friction_std = math.hypot(half_level * (upper[i] - lower[i]), noise_std[i])
+        half_level, upper, lower = 0.5 * terms[0, i], terms[2, i], terms[3, i]
+        friction_mean = half_level * (upper + lower) + terms[1, i]
+        friction_std = math.hypot(half_level * (upper - lower), noise_std[i])
         drift = coriolis_drift[i] - gravity[i] - friction_mean
         u = tau[i] + 0.5 * (drift + previous_drift[i])
         previous_drift[i] = drift

@@ -18,7 +18,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from leadthrough.compiled import kernel
 from leadthrough.errors import ParameterError
 from leadthrough.filters import low_pass, pole
 from leadthrough.friction.model import FrictionModel
@@ -77,10 +76,6 @@ class CoulombCompensation:
         dt: Control period [s].
     """
 
-    #: Run :meth:`step` compiled (:func:`_filtered_step`); False runs the readable NumPy
-    #: reference (:func:`coulomb_compensation`, :func:`~leadthrough.filters.low_pass`).
-    compiled = True
-
     def __init__(
         self,
         friction: FrictionModel,
@@ -91,11 +86,23 @@ class CoulombCompensation:
         self.parameters = parameters or CoulombCompensationParameters()
         self._pole = pole(dt)
         self._torque = np.zeros(friction.n_joints)
-        self._band = np.full(friction.n_joints, self.parameters.dead_band)  # q̇₀ of every joint
 
     def reset(self) -> None:
         """Forget the filter state."""
         self._torque[:] = 0.0
+
+    @property
+    def pole(self) -> float:
+        """Pole of the filter H(z) at this ``dt`` [–]."""
+        return self._pole
+
+    @property
+    def filtered(self) -> FloatArray:
+        """The filter's state, the latest torque [Nm].
+
+        The array itself: a compiled step updates it in place.
+        """
+        return self._torque
 
     def step(
         self, qd: ArrayLike, q: ArrayLike | None = None, dead_band: ArrayLike | None = None
@@ -109,12 +116,6 @@ class CoulombCompensation:
                 the ramp then ends at ``max(q̇₁, 2 q̇₀)``.
         """
         p = self.parameters
-        velocity = np.asarray(qd, dtype=float)
-        bands = self._band if dead_band is None else np.asarray(dead_band, dtype=float)
-        if self.compiled and velocity.shape == bands.shape == self._torque.shape:
-            _filtered_step(self._torque, velocity, self.friction.coulomb_level(q), bands,
-                           p.fraction, p.full_velocity, self._pole)  # fmt: skip
-            return self._torque.copy()
         band: float | FloatArray
         full: float | FloatArray
         if dead_band is None:
@@ -125,21 +126,3 @@ class CoulombCompensation:
         raw = coulomb_compensation(qd, self.friction.coulomb_level(q), p.fraction, band, full)
         self._torque = low_pass(self._torque, raw, self._pole)
         return self._torque.copy()
-
-
-@kernel
-def _filtered_step(torque, qd, coulomb, band, fraction, full_velocity, pole):  # fmt: skip
-    """:meth:`CoulombCompensation.step` in place on ``torque`` [Nm] (compiled, ~0.5 µs).
-
-    The same arithmetic, in the same order, as :func:`coulomb_compensation` (the ramp ends
-    at ``max(q̇₁, 2 q̇₀)``) followed by :func:`~leadthrough.filters.low_pass`.
-    """
-    for i in range(torque.shape[0]):
-        full = 2.0 * band[i]
-        full = full if full > full_velocity or full != full else full_velocity
-        ramp = (abs(qd[i]) - band[i]) / (full - band[i])
-        ramp = ramp if ramp > 0.0 or ramp != ramp else 0.0
-        ramp = ramp if ramp < 1.0 or ramp != ramp else 1.0
-        sign = 1.0 if qd[i] > 0.0 else (-1.0 if qd[i] < 0.0 else qd[i])  # np.sign (NaN, ±0)
-        raw = ramp * sign * fraction * coulomb[i]
-        torque[i] = pole * torque[i] + (1.0 - pole) * raw

@@ -30,6 +30,7 @@ the sign of the motion. Everything is vectorised: arrays broadcast as (..., n).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields
 from functools import cached_property
 from pathlib import Path
@@ -39,6 +40,7 @@ import numpy as np
 import tomli_w
 from numpy.typing import ArrayLike, NDArray
 
+from leadthrough.compiled import kernel
 from leadthrough.errors import ParameterError
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.validation import real_array
@@ -177,6 +179,30 @@ class FrictionModel:
             self._last[0] = (key, terms)
         return terms
 
+    def terms_into(self, qd: FloatArray, q: FloatArray, out: FloatArray) -> FloatArray:
+        """:meth:`sigmoid_terms` of one sample, written into ``out`` in one compiled pass.
+
+        The control period's form: no arrays allocated, nothing remembered.
+
+        Args:
+            qd: Joint velocities [rad/s], (n,) floats.
+            q: Joint positions [rad], (n,) floats.
+            out: (4, n) floats, written with the rows τ_C(q), c q̇, tanh(A (q̇ + B) / 2)
+                and tanh(A (q̇ − B) / 2).
+
+        Returns:
+            ``out``.
+        """
+        _sigmoid_terms(qd, q, self._term_rows, self._position_dependent, out)
+        return out
+
+    @cached_property
+    def _term_rows(self) -> FloatArray:
+        """The per-joint constants of :func:`_sigmoid_terms`, (8, n)."""
+        return np.array([self.coulomb, self.position_linear, self.position_quadratic,
+                         self.position_mid, self.position_half_range, self._half_slope,
+                         self._half_slope_width, self.viscous])  # fmt: skip
+
     @cached_property
     def _last(self) -> list[tuple | None]:
         """The latest (key, terms) of :meth:`sigmoid_terms`, in a one-element list.
@@ -244,6 +270,27 @@ class FrictionModel:
         except ParameterError as error:
             raise RobotDescriptionError(str(path), f"friction.{error.parameter}",
                                         error.reason) from None  # fmt: skip
+
+
+@kernel
+def _sigmoid_terms(qd, q, rows, position_dependent, out):  # fmt: skip
+    """:meth:`FrictionModel.sigmoid_terms` of one sample into ``out`` (4, n), compiled.
+
+    The same arithmetic, in the same order, as the NumPy code (the level clipped to the
+    span as ``np.clip``, NaN passing through); ``rows`` are
+    :attr:`FrictionModel._term_rows`.
+    """
+    for i in range(qd.shape[0]):
+        level = rows[0, i]
+        if position_dependent:
+            u = (q[i] - rows[3, i]) / rows[4, i]
+            u = -1.0 if u < -1.0 else (1.0 if u > 1.0 else u)
+            level = level * (1.0 + rows[1, i] * u + rows[2, i] * u * u)
+        centre = rows[5, i] * qd[i]
+        out[0, i] = level
+        out[1, i] = rows[7, i] * qd[i]
+        out[2, i] = math.tanh(centre + rows[6, i])
+        out[3, i] = math.tanh(centre - rows[6, i])
 
 
 def level_stays_positive(linear: ArrayLike, quadratic: ArrayLike) -> NDArray[np.bool_]:

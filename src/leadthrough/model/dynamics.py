@@ -16,6 +16,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from leadthrough.compiled import kernel
 from leadthrough.errors import InputShapeError
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.pinocchio_model import FLANGE_FRAME, TCP_FRAME, build_model
@@ -50,10 +51,11 @@ class Dynamics:
         G(q), M(q), Cᵀ(q, q̇) q̇, the TCP Jacobian and pose (see :class:`ModelSnapshot`).
         """
         q, qd = self._vector(q, "q").copy(), self._vector(qd, "qd").copy()
-        model, data = self.model, self.data
+        model, data, n = self.model, self.data, self.n
         gravity = pin.computeGeneralizedGravity(model, data, q).copy()
-        mass = self._mass(q)
-        drift = pin.computeCoriolisMatrix(model, data, q, qd).T @ qd
+        upper = pin.crba(model, data, q)  # M's upper triangle (Pinocchio's own array)
+        mass, drift = np.empty((n, n)), np.empty(n)
+        _mass_and_drift(upper, pin.computeCoriolisMatrix(model, data, q, qd), qd, mass, drift)
         jacobian = pin.computeFrameJacobian(model, data, q, self._tcp, _WORLD_ALIGNED)
         pose = pin.updateFramePlacement(model, data, self._tcp).homogeneous.copy()
         return ModelSnapshot(q, qd, gravity, mass, drift, jacobian, pose)
@@ -132,3 +134,20 @@ class Dynamics:
         if array.shape != (self.n,):
             raise InputShapeError(name, (self.n,), array.shape)
         return array
+
+
+@kernel
+def _mass_and_drift(upper, coriolis, qd, mass, drift):  # fmt: skip
+    """M(q) from its upper triangle and Cᵀ(q, q̇) q̇ [Nm], into ``mass`` and ``drift``.
+
+    What ``Dynamics.mass`` (the upper triangle mirrored) and
+    ``coriolis_transpose_times_velocity`` (``C.T @ q̇``) compute, in one compiled pass
+    over Pinocchio's arrays.
+    """
+    n = qd.shape[0]
+    for i in range(n):
+        total = 0.0
+        for j in range(n):
+            mass[i, j] = upper[i, j] if j >= i else upper[j, i]
+            total += coriolis[j, i] * qd[j]
+        drift[i] = total

@@ -276,8 +276,9 @@ class SafetySupervisor:
         self._q_last_good = q
         if any_fast or "joint_speed" in self._active:
             self._log_joint_speed(qd, fast.copy())
-        if teaching:
-            self._log_tool_speed(speed)
+        if teaching and (speed > self.max_tool_speed or speed > self.parameters.tool_speed_limit
+                         or "tool_speed" in self._active):  # fmt: skip
+            self._log_tool_speed(speed)  # (else: no new largest speed, no episode to open or end)
         if any_inside or "soft_limit" in self._active:
             self._log_walls(q, inside.copy())
         if status == NOT_FINITE:
