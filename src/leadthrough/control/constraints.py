@@ -9,6 +9,7 @@ the arm, respect the constraint); in passive mode it is added to the command.
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -22,9 +23,8 @@ from leadthrough.model.dynamics import Dynamics
 from leadthrough.model.snapshot import ModelSnapshot
 from leadthrough.validation import real, real_array
 
-#: The world axes, unit vectors (rows).
-_AXES = np.eye(3)
-_AXES.setflags(write=False)
+#: Three floats: a point, a velocity or a force in world axes.
+Triple = tuple[float, float, float]
 
 
 @dataclass(frozen=True)
@@ -43,14 +43,19 @@ class VirtualConstraint(ABC):
         real("stiffness", self.stiffness, minimum=0.0, error=ParameterError)
         real("damping", self.damping, minimum=0.0, error=ParameterError)
 
-    @abstractmethod
-    def force(self, position: FloatArray, velocity: FloatArray) -> FloatArray:
+    def force(self, position: ArrayLike, velocity: ArrayLike) -> FloatArray:
         """Force on the TCP [N], world axes, for its position [m] and velocity [m/s]."""
+        return np.array(self._force(_triple(position), _triple(velocity)))
 
-    def _push(self, violation: float, direction: FloatArray, velocity: FloatArray) -> FloatArray:
+    @abstractmethod
+    def _force(self, position: Triple, velocity: Triple) -> Triple:
+        """:meth:`force` on three floats each (a control period's few µs: no small arrays)."""
+
+    def _push(self, violation: float, direction: Triple, velocity: Triple) -> Triple:
         """Spring along ``direction`` (unit, pointing back inside) plus damping along it."""
-        approach = min(float(direction @ velocity), 0.0)  # only while moving further out
-        return (self.stiffness * violation - self.damping * approach) * direction
+        approach = min(_dot(direction, velocity), 0.0)  # only while moving further out
+        push = self.stiffness * violation - self.damping * approach
+        return push * direction[0], push * direction[1], push * direction[2]
 
 
 @dataclass(frozen=True)
@@ -64,6 +69,7 @@ class Plane(VirtualConstraint):
 
     point: ArrayLike = (0.0, 0.0, 0.0)
     normal: ArrayLike = (0.0, 0.0, 1.0)
+    _plane: tuple[Triple, Triple] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -74,14 +80,14 @@ class Plane(VirtualConstraint):
         object.__setattr__(
             self, "point", real_array("point", self.point, (3,), error=ParameterError)
         )
+        object.__setattr__(self, "_plane", (_triple(self.normal), _triple(self.point)))
 
-    def force(self, position: FloatArray, velocity: FloatArray) -> FloatArray:
-        """Pull back onto the plane."""
-        normal, point = np.asarray(self.normal, dtype=float), np.asarray(self.point, dtype=float)
-        distance = float(normal @ (position - point))
-        inward = -np.sign(distance) * normal if distance else normal
-        damping = -self.damping * float(normal @ velocity) * normal
-        return self.stiffness * abs(distance) * inward + damping
+    def _force(self, position: Triple, velocity: Triple) -> Triple:
+        """Pull back onto the plane: −(k d + c v·n) n, d the signed distance."""
+        normal, point = self._plane
+        offset = _difference(position, point)
+        push = -self.stiffness * _dot(normal, offset) - self.damping * _dot(normal, velocity)
+        return push * normal[0], push * normal[1], push * normal[2]
 
 
 @dataclass(frozen=True)
@@ -95,6 +101,7 @@ class Box(VirtualConstraint):
 
     lower: ArrayLike = (-1.0, -1.0, -1.0)
     upper: ArrayLike = (1.0, 1.0, 1.0)
+    _corners: tuple[Triple, Triple] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -104,18 +111,19 @@ class Box(VirtualConstraint):
             raise ParameterError("upper", "every coordinate must exceed lower's")
         object.__setattr__(self, "lower", lower)
         object.__setattr__(self, "upper", upper)
+        object.__setattr__(self, "_corners", (_triple(lower), _triple(upper)))
 
-    def force(self, position: FloatArray, velocity: FloatArray) -> FloatArray:
+    def _force(self, position: Triple, velocity: Triple) -> Triple:
         """Push back through each face that is crossed."""
-        lower, upper = np.asarray(self.lower, dtype=float), np.asarray(self.upper, dtype=float)
-        total = np.zeros(3)
-        for axis, unit in enumerate(_AXES):
+        lower, upper = self._corners
+        total = [0.0, 0.0, 0.0]
+        for axis in range(3):  # _push along the face's inward axis, one coordinate at a time
             below, above = lower[axis] - position[axis], position[axis] - upper[axis]
-            if below > 0:
-                total += self._push(below, unit, velocity)
-            if above > 0:
-                total += self._push(above, -unit, velocity)
-        return total
+            if below > 0:  # pushed back along +axis
+                total[axis] += self.stiffness * below - self.damping * min(velocity[axis], 0.0)
+            if above > 0:  # pushed back along −axis
+                total[axis] -= self.stiffness * above - self.damping * min(-velocity[axis], 0.0)
+        return total[0], total[1], total[2]
 
 
 @dataclass(frozen=True)
@@ -129,6 +137,7 @@ class KeepOutSphere(VirtualConstraint):
 
     center: ArrayLike = (0.0, 0.0, 0.0)
     radius: float = 0.1
+    _center: Triple = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -136,14 +145,16 @@ class KeepOutSphere(VirtualConstraint):
             self, "center", real_array("center", self.center, (3,), error=ParameterError)
         )
         real("radius", self.radius, minimum=0.0, strict=True, error=ParameterError)
+        object.__setattr__(self, "_center", _triple(self.center))
 
-    def force(self, position: FloatArray, velocity: FloatArray) -> FloatArray:
+    def _force(self, position: Triple, velocity: Triple) -> Triple:
         """Push radially outwards while inside."""
-        offset = position - np.asarray(self.center, dtype=float)
-        distance = float(np.linalg.norm(offset))
+        offset = _difference(position, self._center)
+        distance = math.sqrt(_dot(offset, offset))
         if distance >= self.radius:
-            return np.zeros(3)
-        outward = offset / distance if distance > 1e-9 else np.array([0.0, 0.0, 1.0])
+            return 0.0, 0.0, 0.0
+        outward = (offset[0] / distance, offset[1] / distance, offset[2] / distance) if (
+            distance > 1e-9) else (0.0, 0.0, 1.0)  # fmt: skip
         return self._push(self.radius - distance, outward, velocity)
 
 
@@ -164,6 +175,24 @@ def constraint_torque(
     if model is None:
         model = dynamics.snapshot(q, qd)
     jacobian = model.tool_jacobian[:3]
-    position, velocity = model.tool_pose[:3, 3], jacobian @ qd
-    force = sum((c.force(position, velocity) for c in constraints), np.zeros(3))
+    position, velocity = _triple(model.tool_pose[:3, 3]), _triple(jacobian @ qd)
+    total = [0.0, 0.0, 0.0]
+    for constraint in constraints:
+        for axis, value in enumerate(constraint._force(position, velocity)):
+            total[axis] += value
+    force = np.array(total)
     return jacobian.T @ force, force
+
+
+def _triple(vector: ArrayLike) -> Triple:
+    array = vector if isinstance(vector, np.ndarray) else np.asarray(vector, dtype=float)
+    x, y, z = array.tolist()
+    return float(x), float(y), float(z)
+
+
+def _dot(a: Triple, b: Triple) -> float:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _difference(a: Triple, b: Triple) -> Triple:
+    return a[0] - b[0], a[1] - b[1], a[2] - b[2]
