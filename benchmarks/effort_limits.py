@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 import leadthrough as lt
+from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.admittance import dead_zone
 from leadthrough.experiments.friction_study import run_friction_study
 from leadthrough.experiments.lead_through import PATHS, guided_run
@@ -21,19 +22,19 @@ from leadthrough.twin.presets import REALISTIC_TWIN
 from leadthrough.twin.simulator import DigitalTwin
 
 
-class TruthDriven(lt.LeadThrough):
-    """Active lead-through whose admittance input is the twin's true operator torque.
+class TruthLaw(ActiveLaw):
+    """The active law with the twin's true operator torque as its input.
 
-    Args:
+    Attributes:
         twin: The twin whose truth is read (never available on a robot).
         rule: ``"moving"``: only joints moving the way the torque pushes; ``"engaged"``:
             every joint while one moves that way; ``"dead-zone"``: every joint, through a
             dead-zone of 0.2 τ_C.
     """
 
-    def __init__(self, robot, friction, twin: DigitalTwin, rule: str) -> None:
-        super().__init__(robot, "active", friction=friction)
-        self.twin, self.rule = twin, rule
+    compiled = False  # the NumPy law, whose drive this replaces
+    twin: DigitalTwin
+    rule: str
 
     def _update_drive(self, estimate, q, qd, gravity) -> None:
         super()._update_drive(estimate, q, qd, gravity)  # the bias keeps learning as usual
@@ -42,11 +43,21 @@ class TruthDriven(lt.LeadThrough):
             np.abs(qd) > self.parameters.compensation.dead_band
         )
         if self.rule == "moving":
-            self._drive = np.where(with_motion, tau, 0.0)
+            self.drive = np.where(with_motion, tau, 0.0)
         elif self.rule == "engaged":
-            self._drive = tau if with_motion.any() else np.zeros_like(tau)
+            self.drive = tau if with_motion.any() else np.zeros_like(tau)
         else:
-            self._drive = dead_zone(tau, 0.2 * self.friction.coulomb)
+            self.drive = dead_zone(tau, 0.2 * self.friction.coulomb)
+
+
+class TruthDriven(lt.LeadThrough):
+    """Active lead-through whose admittance input is the twin's true operator torque."""
+
+    law_class = TruthLaw
+
+    def __init__(self, robot, friction, twin: DigitalTwin, rule: str) -> None:
+        super().__init__(robot, "active", friction=friction)
+        self.law.twin, self.law.rule = twin, rule
 
 
 def rms_force(robot, friction, path: str, rule: str) -> float:

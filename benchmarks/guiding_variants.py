@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 import leadthrough as lt
+from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.admittance import operator_weight
 from leadthrough.control.calibration import CalibrationParameters
 from leadthrough.estimation.observer import MomentumObserver, ObserverParameters
@@ -54,15 +55,24 @@ def no_weighting(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
     return _build(robot, mode, assist_knee=0.0)
 
 
-class _FullResidual(lt.LeadThrough):
+class _FullResidualLaw(ActiveLaw):
     """The weight sets the virtual damping only; the whole residual drives the admittance."""
 
     compiled = False
 
     def _update_drive(self, estimate: Any, q: Any, qd: Any, gravity: Any) -> None:
         super()._update_drive(estimate, q, qd, gravity)
-        weighted = self._weight > 0.0
-        self._drive = np.where(weighted, self._drive / np.where(weighted, self._weight, 1.0), 0.0)
+        self.drive = _unweighted(self.drive, self.weight)
+
+
+class _FullResidual(lt.LeadThrough):
+    law_class = _FullResidualLaw
+
+
+def _unweighted(drive: np.ndarray, weight: np.ndarray) -> np.ndarray:
+    """The residual a weighted drive came from [Nm] (0 where the weight is 0)."""
+    weighted = weight > 0.0
+    return np.where(weighted, drive / np.where(weighted, weight, 1.0), 0.0)
 
 
 def full_residual(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
@@ -114,7 +124,7 @@ def smooth_rate_guiding(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough
     return _build(robot, mode, cls=_OwnCalibrationObserver, observer=observer)
 
 
-class _ToolWrenchPrior(lt.LeadThrough):
+class _ToolWrenchPriorLaw(ActiveLaw):
     """The operator torque as a posterior under ``τ_op ~ N(0, Jᵀ Σ_F J + σ_L² I)``.
 
     The hand holds the tool (a wrench at the TCP, Σ_F: 30 N, 3 Nm) plus a little anywhere
@@ -130,17 +140,22 @@ class _ToolWrenchPrior(lt.LeadThrough):
     def _update_drive(self, estimate: Any, q: Any, qd: Any, gravity: Any) -> None:
         super()._update_drive(estimate, q, qd, gravity)  # bias learning and the residual
         p = self.parameters
-        weighted = self._weight > 0.0
-        residual = np.where(weighted, self._drive / np.where(weighted, self._weight, 1.0), 0.0)
+        residual = _unweighted(self.drive, self.weight)
         uncertainty = (self._rest_tolerance + self.model_error.tolerance(gravity)
                        + self.friction.coulomb_uncertainty(qd, q))  # fmt: skip
-        jacobian = self.model.tool_jacobian  # type: ignore[union-attr]
+        if not hasattr(self, "_dynamics"):
+            self._dynamics = lt.Dynamics(self.robot)
+        jacobian = self._dynamics.snapshot(q, qd).tool_jacobian
         covariance = jacobian.T @ self.prior @ jacobian + self.anywhere**2 * np.eye(q.size)
         gain = np.linalg.solve(covariance + np.diag(uncertainty**2), covariance).T
         posterior = gain @ residual
         std = np.sqrt(np.maximum(np.diag(covariance - gain @ covariance), 1e-24))
-        self._weight = operator_weight(posterior, std, p.assist_knee)
-        self._drive = posterior * self._weight
+        self.weight = operator_weight(posterior, std, p.assist_knee)
+        self.drive = posterior * self.weight
+
+
+class _ToolWrenchPrior(lt.LeadThrough):
+    law_class = _ToolWrenchPriorLaw
 
 
 def tool_wrench_prior(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
+from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.dither import DitherParameters
 from leadthrough.control.feedforward import PassiveFeedForward
 from leadthrough.control.lead_through import LeadThrough
@@ -18,13 +19,19 @@ from test_speed_reference import CASES
 PERIODS = 20000
 
 
-def _state(controller: LeadThrough) -> np.ndarray:
+def _state(law: ActiveLaw) -> np.ndarray:
     """Everything the active law keeps or produces, in one row."""
-    references = controller._references
-    bias = controller.model_error
-    return np.concatenate([controller._drive, controller._weight, controller._feedback,
+    references, bias = law.references, law.model_error
+    return np.concatenate([law.drive, law.weight, law.feedback,
                            bias.bias, bias.gravity_learned, [bias.confidence],
                            references.q_ref, references.qd_ref])  # fmt: skip
+
+
+def _law_period(law: ActiveLaw, compiled: bool, q, qd, estimate, gravity, constraint, mass):
+    """One period of the law, compiled or its NumPy reference."""
+    law.compiled = compiled
+    law.operator_torque(estimate, q, qd, gravity)
+    law.tracking(q, qd, constraint, mass)
 
 
 def _law_run(robot: lt.RobotDescription, parameters: LeadThroughParameters, friction,
@@ -36,7 +43,7 @@ def _law_run(robot: lt.RobotDescription, parameters: LeadThroughParameters, fric
     quiet, a push, or a large one; G is random, M(q) the model's.
     """
     rng = np.random.default_rng(seed)
-    controller = LeadThrough(robot, "active", friction=friction, parameters=parameters)
+    law = LeadThrough(robot, "active", friction=friction, parameters=parameters).law
     mass_of = lt.Dynamics(robot).mass
     n = robot.n_joints
     offset, home, rows = np.zeros(n), robot.home(), []
@@ -57,13 +64,8 @@ def _law_run(robot: lt.RobotDescription, parameters: LeadThroughParameters, fric
         gravity = rng.normal(0.0, 20.0, n)
         constraint = rng.normal(0.0, 2.0, n) if k % 3 == 0 else np.zeros(n)
         mass = mass_of(np.clip(q, robot.q_min, robot.q_max))
-        if compiled:
-            controller._compiled_drive(estimate, q, qd, gravity)
-            controller._compiled_admittance(q, qd, constraint, mass)
-        else:
-            controller._update_drive(estimate, q, qd, gravity)
-            controller._admittance(q, qd, controller._drive + constraint, mass)
-        rows.append(_state(controller))
+        _law_period(law, compiled, q, qd, estimate, gravity, constraint, mass)
+        rows.append(_state(law))
     return np.array(rows)
 
 
@@ -95,18 +97,13 @@ def test_a_nan_estimate_propagates_as_in_numpy():
     robot = lt.robots.yumi()
     outputs = []
     for compiled in (True, False):
-        controller = LeadThrough(robot, "active")
+        law = LeadThrough(robot, "active").law
         q, qd, mass = robot.home(), np.zeros(7), lt.Dynamics(robot).mass(robot.home())
         for k in range(5):
             estimate = np.full(7, 2.0)
             estimate[2] = np.nan if k == 2 else 2.0
-            if compiled:
-                controller._compiled_drive(estimate, q, qd, np.ones(7))
-                controller._compiled_admittance(q, qd, np.zeros(7), mass)
-            else:
-                controller._update_drive(estimate, q, qd, np.ones(7))
-                controller._admittance(q, qd, controller._drive, mass)
-            outputs.append(_state(controller))
+            _law_period(law, compiled, q, qd, estimate, np.ones(7), np.zeros(7), mass)
+            outputs.append(_state(law))
     compiled_rows, reference_rows = np.split(np.array(outputs), 2)
     assert np.isnan(reference_rows[-1]).any()
     np.testing.assert_allclose(compiled_rows, reference_rows, rtol=1e-12, atol=1e-12,
@@ -188,6 +185,6 @@ def test_compiled_friction_terms_equal_sigmoid_terms():
 def test_steps_with_the_numpy_law_equal_the_compiled_one(case, monkeypatch):
     """Whole steps (modes, calibration, constraints, a fault, the Panda): equal to 1e-12."""
     compiled = CASES[case]()
-    for component in (LeadThrough, PassiveFeedForward, MomentumObserver):
+    for component in (ActiveLaw, PassiveFeedForward, MomentumObserver):
         monkeypatch.setattr(component, "compiled", False)
     np.testing.assert_allclose(compiled, CASES[case](), rtol=1e-12, atol=1e-12, equal_nan=True)

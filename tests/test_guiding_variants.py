@@ -29,17 +29,30 @@ def test_variant_guides_and_passive_stays_default(robot, name):
     """Each variant's active controller guides a push and its passive one is the default."""
     factory = getattr(guiding_variants, name)
     assert factory(robot, "passive").parameters == lt.LeadThroughParameters(mode="passive")
-    controller = factory(robot, "active")
+    controller = _pushed(robot, factory(robot, "active"))
+    assert controller.state.name == "TEACHING"
+    assert controller.law.references.q_ref[3] - robot.home()[3] > 1e-4  # along the push
+
+
+@pytest.mark.parametrize("name", ("full_residual", "tool_wrench_prior"))
+def test_a_variant_law_is_the_one_that_runs(robot, name):
+    """The variant's own law drives: its operator torque differs from the default's."""
+    variant = _pushed(robot, getattr(guiding_variants, name)(robot, "active"))
+    default = _pushed(robot, lt.LeadThrough(robot, mode="active"))
+    assert np.max(np.abs(variant.operator_torque - default.operator_torque)) > 1e-3
+
+
+def _pushed(robot: lt.RobotDescription, controller: lt.LeadThrough) -> lt.LeadThrough:
+    """``controller`` (calibration skipped) after 200 periods of a 2 Nm push on joint 4."""
     controller.calibrate = False
     controller.reset()
     dynamics = lt.Dynamics(robot)
     q = np.array(robot.home(), dtype=float)
     push = np.zeros(robot.n_joints)
-    push[3] = 2.0  # a steady push on joint 4 [Nm], far above any margin
+    push[3] = 2.0  # far above any margin
     rng = np.random.default_rng(0)
     for _ in range(200):  # the arm held still, its encoders alive (a frozen one faults)
         noisy = q + rng.normal(0.0, 1e-6, q.size)
         command = controller.step(noisy, np.zeros(robot.n_joints), dynamics.gravity(q) - push)
         assert np.all(np.isfinite(command))
-    assert controller.state.name == "TEACHING"
-    assert controller._references.q_ref[3] - q[3] > 1e-4  # along the push
+    return controller

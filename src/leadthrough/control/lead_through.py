@@ -8,16 +8,12 @@ One step, in order, on the robot's sample (its time stamp is the one clock):
 2. feed-forward ``τ_ff = G(q) + τ_fc(q̇) + dither`` (thesis eq. 6.3, §5.3);
 3. the Kalman observer estimates ``τ̂_ext`` from the measured torque (or the command
    sent, if the robot measures none), dither removed;
-4. model error must not become motion: a bias learned while the arm rests is removed
-   from ``τ̂_ext`` (it can only silence a reading, never create one) and what remains
-   is weighed smoothly by how far it stands out of the model's own uncertainty
-   (friction error and noise, gravity error, the observer's std,
-   :func:`~leadthrough.control.admittance.operator_weight`);
-5. active mode: the admittance model (virtual inertia k_M M(q) heavier than the arm,
-   damping that rises once nobody pushes) turns the operator torque (plus virtual
-   constraints) into references that stay clear of the joint limits, tracked by a PD
-   whose gains follow M(q) (thesis eqs. 6.4–6.6); near an end-stop a push *away* from
-   it is taken for the stop's reaction, not the operator's (the failure of thesis §6.3.2);
+4. the operator torque: model error must not become motion (a learned bias and the
+   friction the model may overstate removed, the rest weighed by the model's own
+   uncertainty; :class:`~leadthrough.control.active_law.ActiveLaw`);
+5. active mode: the admittance model turns it (plus virtual constraints) into references,
+   tracked by a PD whose gains follow M(q) (thesis eqs. 6.4–6.6; the same
+   :class:`~leadthrough.control.active_law.ActiveLaw`);
 6. the supervisor limits the command (torque, joint and TCP speed, soft walls).
 
 An exception in any of these latches the supervisor's fault naming the exception and
@@ -31,20 +27,10 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from leadthrough.control.admittance import (
-    AdmittanceState,
-    admittance_step,
-    dead_zone,
-    keep_within,
-    operator_weight,
-    tracking_torque,
-    virtual_damping,
-)
-from leadthrough.control.bias import ModelErrorBias
+from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.calibration import Calibration, CalibrationRun
 from leadthrough.control.constraints import VirtualConstraint, constraint_torque
 from leadthrough.control.feedforward import DelayLine, FeedForwardTorques, PassiveFeedForward
-from leadthrough.control.fused import admittance_law, operator_drive
 from leadthrough.control.parameters import LeadThroughParameters, Mode
 from leadthrough.control.warm_up import exercise
 from leadthrough.errors import ParameterError, failure
@@ -84,10 +70,9 @@ class LeadThrough:
         ParameterError: A setting that does not fit the robot (one line naming it).
     """
 
-    #: Run the active law compiled (:mod:`leadthrough.control.fused`); False runs the
-    #: readable NumPy reference (:meth:`_update_drive`, :meth:`_admittance`), which the
-    #: tests compare it to.
-    compiled = True
+    #: The law of active mode (and of the operator torque in both modes); a subclass of
+    #: :class:`~leadthrough.control.active_law.ActiveLaw` changes it (experiments).
+    law_class: type[ActiveLaw] = ActiveLaw
 
     def __init__(
         self,
@@ -120,14 +105,7 @@ class LeadThrough:
                                      f"{type(constraint).__name__}")  # fmt: skip
         self.calibrate = bool(calibrate)
         self.supervisor = SafetySupervisor(Dynamics(robot), dt, parameters.safety)
-        self._reference_low = robot.q_min + parameters.limit_zone
-        self._reference_high = robot.q_max - parameters.limit_zone
-        p = parameters  # the scalars of the compiled law (fused.DRIVE/ADMITTANCE_SCALARS)
-        self._drive_scalars = np.array([p.mass_uncertainty, self.dt, p.bias_time,
-                                        p.drive_gain_uncertainty, p.assist_knee])  # fmt: skip
-        self._admittance_scalars = np.array([float(p.limit_aware), p.reanchor_error,
-            p.damping_time, p.rest_damping, p.inertia_scale, self.dt,
-            (2.0 * np.pi * p.position_bandwidth) ** 2, p.velocity_time])  # fmt: skip
+        self.law = self.law_class(robot, parameters, self.dt, friction)
         self.reset()
 
     def _build(self, robot: RobotDescription, friction: FrictionModel) -> None:
@@ -139,18 +117,7 @@ class LeadThrough:
         self.feed_forward = PassiveFeedForward(self.dynamics, friction, self.dt, p.compensation,
                                                p.dither, measurement_delay=None)  # fmt: skip
         self.observer = MomentumObserver(self.dynamics, friction, self.dt, p.observer)
-        relative = (friction.relative_error if p.friction_uncertainty is None
-                    else np.full(robot.n_joints, p.friction_uncertainty))  # fmt: skip
-        relative = np.maximum(relative, p.stiction_margin)
-        self._friction_relative = relative
-        nominal = self.nominal_friction.relative_error
-        self._viscous_relative = np.maximum(nominal, p.stiction_margin)
-        self._friction_tolerance = relative * friction.coulomb + 2.0 * friction.noise_std
-        self._rest_tolerance = p.stiction_margin * friction.coulomb + 2.0 * friction.noise_std
-        self._speed_cap = p.assist_speed_fraction * robot.velocity_limits
-        self._joint_constants = np.array([self._friction_tolerance, self._reference_low,
-            self._reference_high, relative, self._viscous_relative, self._rest_tolerance,
-            self._speed_cap])  # fused.JOINT_ROWS  # fmt: skip
+        self.law.use_friction(friction)
 
     # --- state a user may read ---------------------------------------------------------
 
@@ -189,12 +156,12 @@ class LeadThrough:
     @property
     def operator_torque(self) -> FloatArray:
         """What drives the admittance: τ̂_ext − bias, through the dead-zone [Nm]."""
-        return self._drive.copy()
+        return self.law.drive.copy()
 
     @property
     def bias(self) -> FloatArray:
         """Learned model-error bias [Nm]."""
-        return self.model_error.bias.copy()
+        return self.law.model_error.bias.copy()
 
     @property
     def state(self) -> SupervisorState:
@@ -222,14 +189,7 @@ class LeadThrough:
         self.supervisor.teach()
         p = self.parameters
         n = self.robot.n_joints
-        self.model_error = ModelErrorBias(n, p.bias_time, p.mass_uncertainty)
-        self._drive = np.zeros(n)
-        self._weight = np.zeros(n)
-        self._feedback = np.zeros(n)  # the admittance's last tracking torque [Nm]
-        self._references: AdmittanceState | None = None
-        self._work = np.zeros((n, n + 1))  # the compiled admittance's scratch space
-        self._terms = np.zeros((4, n))  # the friction terms of the period (terms_into)
-        self._term_rows = tuple(self._terms)  # its rows (views), for the compiled drive
+        self.law.reset()
         self._no_constraint = np.zeros(n)  # the constraint torque without constraints [Nm]
         self._sent = DelayLine((2, n), p.measurement_delay)  # (command, its dither) [Nm]
         self._own_clock = 0.0  # [s], for the positional form of step, which brings no time
@@ -361,7 +321,8 @@ class LeadThrough:
         robot = calibration.robot(self.robot)
         accuracy = self.parameters.calibration.friction_accuracy  # type: ignore[union-attr]
         self._build(robot, calibration.friction(self.nominal_friction, accuracy))
-        self.model_error.calibrate(calibration.bias, self.dynamics.gravity(calibration.pose))
+        self.law.model_error.calibrate(calibration.bias,
+                                       self.dynamics.gravity(calibration.pose))  # fmt: skip
 
     def _control(
         self, t: float, model: ModelSnapshot, tau_measured: FloatArray | None
@@ -373,13 +334,10 @@ class LeadThrough:
         self.last_feed_forward = feed_forward
         applied, dither = self._measured(tau_measured)
         self._stage = "observer"
-        terms = self.friction.terms_into(qd, q, self._terms)  # once for the period
+        terms = self.law.friction_terms(q, qd)  # once for the period
         estimate = self.observer.update(q, qd, applied - dither, model, terms)
         self._stage = "operator torque"
-        if self.compiled:
-            self._compiled_drive(estimate, q, qd, model.gravity, terms)
-        else:
-            self._update_drive(estimate, q, qd, model.gravity)
+        self.law.operator_torque(estimate, q, qd, model.gravity, terms)
         torque = feed_forward.total
         self._stage = "constraints"
         constraint = self._no_constraint
@@ -388,111 +346,4 @@ class LeadThrough:
         if self.mode == "passive":
             return (torque + constraint if self.constraints else torque), feed_forward.dither
         self._stage = "admittance"
-        if self.compiled:
-            active = self._compiled_admittance(q, qd, constraint, model.mass)
-        else:
-            active = self._admittance(q, qd, self._drive + constraint, model.mass)
-        return torque + active, feed_forward.dither
-
-    def _compiled_drive(
-        self,
-        estimate: FloatArray,
-        q: FloatArray,
-        qd: FloatArray,
-        gravity: FloatArray,
-        terms: FloatArray | None = None,
-    ) -> None:
-        """:meth:`_update_drive` in one compiled pass (:func:`fused.operator_drive`).
-
-        ``terms``: the friction terms at (q̇, q) (``FrictionModel.terms_into``), if computed.
-        """
-        if terms is None:
-            terms = self.friction.terms_into(qd, q, self._terms)
-        rows = self._term_rows if terms is self._terms else tuple(terms)
-        bias, (level, viscous, upper, lower) = self.model_error, rows
-        bias.confidence = operator_drive(estimate, q, gravity, level, viscous, upper, lower,
-            self._joint_constants, self._drive_scalars, bias.bias, bias.gravity_learned,
-            bias.confidence, self._weight, self._drive, self._feedback)  # fmt: skip
-
-    def _compiled_admittance(
-        self, q: FloatArray, qd: FloatArray, constraint: FloatArray, mass: FloatArray
-    ) -> FloatArray:
-        """:meth:`_admittance` of drive + constraint, compiled (:func:`fused.admittance_law`)."""
-        if self._references is None:
-            self._references = AdmittanceState(q.copy(), qd.copy())
-        references = self._references
-        admittance_law(q, qd, self._drive, constraint, mass, self._weight, self._joint_constants,
-                       self._admittance_scalars, references.q_ref, references.qd_ref,
-                       self._feedback, self._work)  # fmt: skip
-        return self._feedback
-
-    def _update_drive(
-        self, estimate: FloatArray, q: FloatArray, qd: FloatArray, gravity: FloatArray
-    ) -> None:
-        """Remove the bias and the friction the model may overstate; weigh what remains.
-
-        The weight compares the residual with what the model may still read without an
-        operator: the gravity error (:class:`ModelErrorBias`), the stiction no sigmoid
-        describes, the friction noise, and the Coulomb uncertainty of the friction model
-        (≈ τ_C at rest, where friction may hold any push of that size unseen, → 0 moving).
-        """
-        p = self.parameters
-        plausible = self._friction_tolerance + p.mass_uncertainty * np.abs(gravity)
-        clear_of_limits = bool(np.all((q > self._reference_low) & (q < self._reference_high)))
-        unguided = (1.0 - float(np.max(self._weight))) ** 2 if clear_of_limits else 0.0
-        self.model_error.update(estimate, gravity, self.dt, 2.0 * plausible, unguided)
-        residual = dead_zone(estimate, 0.0, self.model_error.bias) - self._friction_margin(q, qd)
-        residual = residual - p.drive_gain_uncertainty * self._feedback
-        uncertainty = (self._rest_tolerance + self.model_error.tolerance(gravity)
-                       + self.friction.coulomb_uncertainty(qd, q))  # fmt: skip
-        self._weight = operator_weight(residual, uncertainty, p.assist_knee)
-        self._drive = residual * self._weight
-
-    def _friction_margin(self, q: FloatArray, qd: FloatArray) -> FloatArray:
-        """The friction the model may overstate, along the motion [Nm].
-
-        Removed from the estimate, it makes any friction error read as friction (against
-        the motion), never as a push along it: a released arm cannot run away on a model
-        whose friction is too high. Coulomb part with the (calibrated) level's relative
-        error, viscous part with the nominal model's (the calibration does not see it).
-        """
-        viscous = self.friction.viscous * qd
-        coulomb = self.friction.mean(qd, q) - viscous
-        return self._friction_relative * coulomb + self._viscous_relative * viscous
-
-    def _admittance(
-        self, q: FloatArray, qd: FloatArray, drive: FloatArray, mass: FloatArray
-    ) -> FloatArray:
-        """References from the admittance model, and the PD torque that tracks them.
-
-        Virtual inertia k_M M(q) and damping :func:`virtual_damping`; the PD gains follow
-        the joint inertias m_ii(q). A joint whose tracking is lost (an end-stop, a
-        collision) has its references re-anchored to the measured state: nothing winds up.
-        """
-        p = self.parameters
-        if p.limit_aware:
-            drive = self._ignore_end_stop_reaction(q, drive)
-        inertia = np.diag(mass)
-        references = self._references or AdmittanceState(q.copy(), qd.copy())
-        lost = np.abs(references.q_ref - q) > p.reanchor_error
-        references = AdmittanceState(np.where(lost, q, references.q_ref),
-                                     np.where(lost, qd, references.qd_ref))  # fmt: skip
-        damping = virtual_damping(inertia, p.damping_time, p.rest_damping, self._weight)
-        references = admittance_step(references, drive, mass, p.inertia_scale, damping, self.dt)
-        references.qd_ref = np.clip(references.qd_ref, -self._speed_cap, self._speed_cap)
-        if p.limit_aware:
-            # a joint the operator holds inside the limit zone is held where it is, not
-            # pulled back out: keeping it out of the zone is the supervisor's soft wall
-            references = keep_within(references, np.minimum(self._reference_low, q),
-                                     np.maximum(self._reference_high, q))  # fmt: skip
-        self._references = references
-        kp = inertia * (2.0 * np.pi * p.position_bandwidth) ** 2
-        self._feedback = tracking_torque(references, q, qd, kp, inertia / p.velocity_time)
-        return self._feedback
-
-    def _ignore_end_stop_reaction(self, q: FloatArray, drive: FloatArray) -> FloatArray:
-        """Near a limit, a torque pushing away from it is the end-stop's reaction."""
-        near_high = q > self._reference_high
-        near_low = q < self._reference_low
-        reaction = (near_high & (drive < 0)) | (near_low & (drive > 0))
-        return np.where(reaction, 0.0, drive)
+        return torque + self.law.tracking(q, qd, constraint, model.mass), feed_forward.dither

@@ -1,0 +1,236 @@
+"""The law of active lead-through and its state: operator torque, admittance, tracking.
+
+Per period, after the observer (thesis §6.2, SPEC §6):
+
+1. :meth:`ActiveLaw.operator_torque`: model error must not become motion. A bias learned
+   while nobody guides is removed from ``τ̂_ext`` (it can silence a reading, never create
+   one), and so is the friction the model may overstate, along the motion; what remains is
+   weighed smoothly by how far it stands out of the model's own uncertainty (friction
+   error and noise, gravity error; :func:`~leadthrough.control.admittance.operator_weight`).
+2. :meth:`ActiveLaw.tracking`: the admittance model (virtual inertia k_M M(q) heavier than
+   the arm, damping that rises once nobody pushes) turns that torque plus the virtual
+   constraints' into references that stay clear of the joint limits, tracked by a PD whose
+   gains follow M(q) (thesis eqs. 6.4–6.6); near an end-stop a push *away* from it is taken
+   for the stop's reaction, not the operator's (the failure of thesis §6.3.2).
+
+Both run compiled (:mod:`leadthrough.control.fused`) unless :attr:`ActiveLaw.compiled` is
+False: the readable NumPy methods below are the reference the tests hold them to. The
+passive mode runs step 1 too (the operator torque is a readout there).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from leadthrough.control.admittance import (
+    AdmittanceState,
+    admittance_step,
+    dead_zone,
+    keep_within,
+    operator_weight,
+    tracking_torque,
+    virtual_damping,
+)
+from leadthrough.control.bias import ModelErrorBias
+from leadthrough.control.fused import admittance_law, operator_drive
+from leadthrough.control.parameters import LeadThroughParameters
+from leadthrough.friction.model import FrictionModel
+from leadthrough.model.description import FloatArray, RobotDescription
+
+
+class ActiveLaw:
+    """Operator torque and admittance of one arm, with their state.
+
+    Args:
+        robot: The arm (joint limits, speed limits).
+        parameters: The controller's settings.
+        dt: Control period [s].
+        nominal_friction: The friction model before any calibration (its relative errors
+            bound the viscous part of the friction margin).
+
+    Attributes:
+        model_error: The bias learned while nobody guides (and by the calibration).
+        drive: Operator torque that drives the admittance [Nm].
+        weight: Operator weight of every joint [–].
+        feedback: The last tracking torque [Nm].
+        references: The admittance's references (None until the first active period).
+    """
+
+    #: Run the law compiled (:mod:`leadthrough.control.fused`); False runs the readable
+    #: NumPy reference (:meth:`_update_drive`, :meth:`_admittance`).
+    compiled = True
+
+    def __init__(
+        self,
+        robot: RobotDescription,
+        parameters: LeadThroughParameters,
+        dt: float,
+        nominal_friction: FrictionModel,
+    ) -> None:
+        self.robot, self.parameters, self.dt = robot, parameters, dt
+        self.nominal_friction = nominal_friction
+        self.n = robot.n_joints
+        self._reference_low = robot.q_min + parameters.limit_zone
+        self._reference_high = robot.q_max - parameters.limit_zone
+        self._speed_cap = parameters.assist_speed_fraction * robot.velocity_limits
+        p = parameters  # the scalars of the compiled law (fused.DRIVE/ADMITTANCE_SCALARS)
+        self._drive_scalars = np.array([p.mass_uncertainty, dt, p.bias_time,
+                                        p.drive_gain_uncertainty, p.assist_knee])  # fmt: skip
+        self._admittance_scalars = np.array([float(p.limit_aware), p.reanchor_error,
+            p.damping_time, p.rest_damping, p.inertia_scale, dt,
+            (2.0 * np.pi * p.position_bandwidth) ** 2, p.velocity_time])  # fmt: skip
+        self._terms = np.zeros((4, self.n))  # the friction terms of a period (terms_into)
+        self._term_rows = tuple(self._terms)  # its rows (views), for the compiled drive
+        self.use_friction(nominal_friction)
+        self.reset()
+
+    def use_friction(self, friction: FrictionModel) -> None:
+        """The per-joint margins and tolerances for ``friction`` (nominal or calibrated)."""
+        p = self.parameters
+        self.friction = friction
+        relative = (friction.relative_error if p.friction_uncertainty is None
+                    else np.full(self.n, p.friction_uncertainty))  # fmt: skip
+        relative = np.maximum(relative, p.stiction_margin)
+        self._friction_relative = relative
+        self._viscous_relative = np.maximum(self.nominal_friction.relative_error,
+                                            p.stiction_margin)  # fmt: skip
+        self._friction_tolerance = relative * friction.coulomb + 2.0 * friction.noise_std
+        self._rest_tolerance = p.stiction_margin * friction.coulomb + 2.0 * friction.noise_std
+        self._joint_constants = np.array([self._friction_tolerance, self._reference_low,
+            self._reference_high, relative, self._viscous_relative, self._rest_tolerance,
+            self._speed_cap])  # fused.JOINT_ROWS  # fmt: skip
+
+    def reset(self) -> None:
+        """Forget the bias, the weights and the references."""
+        p, n = self.parameters, self.n
+        self.model_error = ModelErrorBias(n, p.bias_time, p.mass_uncertainty)
+        self.drive = np.zeros(n)
+        self.weight = np.zeros(n)
+        self.feedback = np.zeros(n)
+        self.references: AdmittanceState | None = None
+        self._work = np.zeros((n, n + 1))  # the compiled admittance's scratch space
+
+    def friction_terms(self, q: FloatArray, qd: FloatArray) -> FloatArray:
+        """The friction model's terms at (q̇, q) for this period (``terms_into``), (4, n)."""
+        return self.friction.terms_into(qd, q, self._terms)
+
+    def operator_torque(
+        self,
+        estimate: FloatArray,
+        q: FloatArray,
+        qd: FloatArray,
+        gravity: FloatArray,
+        terms: FloatArray | None = None,
+    ) -> FloatArray:
+        """Update :attr:`drive` and :attr:`weight` from the observer's estimate [Nm].
+
+        Args:
+            estimate: τ̂_ext [Nm].
+            q: Joint positions [rad].
+            qd: Joint velocities [rad/s].
+            gravity: G(q) [Nm].
+            terms: :meth:`friction_terms` of this period, if computed already.
+        """
+        if not self.compiled:
+            self._update_drive(estimate, q, qd, gravity)
+            return self.drive
+        if terms is None:
+            terms = self.friction_terms(q, qd)
+        rows = self._term_rows if terms is self._terms else tuple(terms)
+        bias, (level, viscous, upper, lower) = self.model_error, rows
+        bias.confidence = operator_drive(estimate, q, gravity, level, viscous, upper, lower,
+            self._joint_constants, self._drive_scalars, bias.bias, bias.gravity_learned,
+            bias.confidence, self.weight, self.drive, self.feedback)  # fmt: skip
+        return self.drive
+
+    def tracking(
+        self, q: FloatArray, qd: FloatArray, constraint: FloatArray, mass: FloatArray
+    ) -> FloatArray:
+        """The PD torque [Nm] that tracks the admittance driven by drive + ``constraint``.
+
+        Args:
+            q: Joint positions [rad].
+            qd: Joint velocities [rad/s].
+            constraint: Virtual constraints' torque [Nm].
+            mass: M(q) [kg m²].
+        """
+        if not self.compiled:
+            return self._admittance(q, qd, self.drive + constraint, mass)
+        if self.references is None:
+            self.references = AdmittanceState(q.copy(), qd.copy())
+        references = self.references
+        admittance_law(q, qd, self.drive, constraint, mass, self.weight, self._joint_constants,
+                       self._admittance_scalars, references.q_ref, references.qd_ref,
+                       self.feedback, self._work)  # fmt: skip
+        return self.feedback
+
+    def _update_drive(
+        self, estimate: FloatArray, q: FloatArray, qd: FloatArray, gravity: FloatArray
+    ) -> None:
+        """Remove the bias and the friction the model may overstate; weigh what remains.
+
+        The weight compares the residual with what the model may still read without an
+        operator: the gravity error (:class:`ModelErrorBias`), the stiction no sigmoid
+        describes, the friction noise, and the Coulomb uncertainty of the friction model
+        (≈ τ_C at rest, where friction may hold any push of that size unseen, → 0 moving).
+        """
+        p = self.parameters
+        plausible = self._friction_tolerance + p.mass_uncertainty * np.abs(gravity)
+        clear_of_limits = bool(np.all((q > self._reference_low) & (q < self._reference_high)))
+        unguided = (1.0 - float(np.max(self.weight))) ** 2 if clear_of_limits else 0.0
+        self.model_error.update(estimate, gravity, self.dt, 2.0 * plausible, unguided)
+        residual = dead_zone(estimate, 0.0, self.model_error.bias) - self._friction_margin(q, qd)
+        residual = residual - p.drive_gain_uncertainty * self.feedback
+        uncertainty = (self._rest_tolerance + self.model_error.tolerance(gravity)
+                       + self.friction.coulomb_uncertainty(qd, q))  # fmt: skip
+        self.weight = operator_weight(residual, uncertainty, p.assist_knee)
+        self.drive = residual * self.weight
+
+    def _friction_margin(self, q: FloatArray, qd: FloatArray) -> FloatArray:
+        """The friction the model may overstate, along the motion [Nm].
+
+        Removed from the estimate, it makes any friction error read as friction (against
+        the motion), never as a push along it: a released arm cannot run away on a model
+        whose friction is too high. Coulomb part with the (calibrated) level's relative
+        error, viscous part with the nominal model's (the calibration does not see it).
+        """
+        viscous = self.friction.viscous * qd
+        coulomb = self.friction.mean(qd, q) - viscous
+        return self._friction_relative * coulomb + self._viscous_relative * viscous
+
+    def _admittance(
+        self, q: FloatArray, qd: FloatArray, drive: FloatArray, mass: FloatArray
+    ) -> FloatArray:
+        """References from the admittance model, and the PD torque that tracks them.
+
+        Virtual inertia k_M M(q) and damping :func:`virtual_damping`; the PD gains follow
+        the joint inertias m_ii(q). A joint whose tracking is lost (an end-stop, a
+        collision) has its references re-anchored to the measured state: nothing winds up.
+        """
+        p = self.parameters
+        if p.limit_aware:
+            drive = self._ignore_end_stop_reaction(q, drive)
+        inertia = np.diag(mass)
+        references = self.references or AdmittanceState(q.copy(), qd.copy())
+        lost = np.abs(references.q_ref - q) > p.reanchor_error
+        references = AdmittanceState(np.where(lost, q, references.q_ref),
+                                     np.where(lost, qd, references.qd_ref))  # fmt: skip
+        damping = virtual_damping(inertia, p.damping_time, p.rest_damping, self.weight)
+        references = admittance_step(references, drive, mass, p.inertia_scale, damping, self.dt)
+        references.qd_ref = np.clip(references.qd_ref, -self._speed_cap, self._speed_cap)
+        if p.limit_aware:
+            # a joint the operator holds inside the limit zone is held where it is, not
+            # pulled back out: keeping it out of the zone is the supervisor's soft wall
+            references = keep_within(references, np.minimum(self._reference_low, q),
+                                     np.maximum(self._reference_high, q))  # fmt: skip
+        self.references = references
+        kp = inertia * (2.0 * np.pi * p.position_bandwidth) ** 2
+        self.feedback = tracking_torque(references, q, qd, kp, inertia / p.velocity_time)
+        return self.feedback
+
+    def _ignore_end_stop_reaction(self, q: FloatArray, drive: FloatArray) -> FloatArray:
+        """Near a limit, a torque pushing away from it is the end-stop's reaction."""
+        near_high = q > self._reference_high
+        near_low = q < self._reference_low
+        reaction = (near_high & (drive < 0)) | (near_low & (drive > 0))
+        return np.where(reaction, 0.0, drive)
