@@ -215,7 +215,7 @@ class LeadThrough:
         self._build(self.robot.with_payload(mass, com), self.friction)
 
     def warm_up(self) -> float:
-        """Compile every kernel the step will call, on a copy of this controller.
+        """Compile every kernel the step will call, on replicas of this controller.
 
         :func:`~leadthrough.runtime.loop.control_loop` calls it before the first sample, so
         that no compilation (seconds) falls into a control period; nothing of this
