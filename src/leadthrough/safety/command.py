@@ -1,8 +1,8 @@
 """The supervisor's command path in one compiled pass (SPEC §7).
 
-:func:`supervised_torque` does, joint by joint, what ``SafetySupervisor._supervised_numpy``
-does with the NumPy functions of :mod:`.braking` (the readable reference, which the
-tests hold it to at 1e-12 over long random sequences): check the inputs, saturate the
+:func:`supervised_torque` does, joint by joint, what :func:`reference_torque` does with the
+NumPy functions of :mod:`.braking` (the readable reference, which the tests hold it to at
+1e-12 over long random sequences): check the inputs, saturate the
 desired torque, brake joints above their speed limit and a tool above its speed limit
 (the braked joints get gravity compensation instead of the controller's torque), add the
 soft walls, check that the result is finite and saturate it again. The supervisor keeps
@@ -15,9 +15,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import NDArray
 
 from leadthrough.compiled import kernel
 from leadthrough.model.description import FloatArray
+from leadthrough.safety import braking
 from leadthrough.safety.limits import SafetyLimits
 
 #: Rows of :func:`bound_rows`, the per-joint bounds the kernel reads.
@@ -115,3 +117,39 @@ def supervised_torque(q, qd, tau_desired, mass, gravity, jacobian, bounds, scala
     for i in range(n):
         out[i] = min(max(out[i], bounds[3, i]), bounds[4, i])
     return GOOD, speed, any_fast, any_inside
+
+
+def reference_torque(
+    limits: SafetyLimits,
+    scalars: FloatArray,
+    q: FloatArray,
+    qd: FloatArray,
+    tau_desired: FloatArray,
+    mass: FloatArray,
+    gravity: FloatArray,
+    jacobian: FloatArray,
+    teaching: bool,
+) -> tuple[int, float, FloatArray, NDArray[np.bool_], NDArray[np.bool_]]:
+    """:func:`supervised_torque` with the NumPy functions of :mod:`.braking`, inputs checked.
+
+    Returns:
+        The status (:data:`GOOD` or :data:`NOT_FINITE`), the tool speed [m/s] (0 when not
+        teaching), the torque [Nm], the joints inside a wall and those above their speed.
+    """
+    limit, braking_time, damping_time = (float(value) for value in scalars)
+    inertia = mass.diagonal()
+    tau = limits.saturated(tau_desired)  # a huge command cannot swamp the safety
+    brake, fast = braking.joint_braking(limits, qd, inertia, braking_time)
+    speed = 0.0
+    if teaching:
+        tool, speed = braking.tool_braking(jacobian, mass, qd, limit, braking_time)
+        if speed > limit:
+            brake = brake + tool
+    # while braking, the brakes win: the controller's torque on a braked joint is replaced
+    # by gravity compensation, so no controller can push through the limit
+    tau = np.where(brake != 0.0, gravity, tau)
+    wall, inside = braking.walls(limits, q, qd, inertia, damping_time)
+    tau = tau + (wall + brake)
+    if np.count_nonzero(np.isfinite(tau)) != tau.size:
+        return NOT_FINITE, speed, tau, inside, fast
+    return GOOD, speed, limits.saturated(tau), inside, fast

@@ -47,9 +47,14 @@ from leadthrough.safety.checks import (
     in_range,
     sample_reason,
     trusted_velocity,
-    within_bounds,
 )
-from leadthrough.safety.command import BAD_INPUT, NOT_FINITE, bound_rows, supervised_torque
+from leadthrough.safety.command import (
+    BAD_INPUT,
+    NOT_FINITE,
+    bound_rows,
+    reference_torque,
+    supervised_torque,
+)
 from leadthrough.safety.limits import SafetyLimits, SafetyParameters
 from leadthrough.validation import real
 
@@ -98,7 +103,7 @@ class SafetySupervisor:
 
     #: Run the sample check and the command path compiled (:meth:`.checks.FrozenEncoders.count`,
     #: :mod:`.command`); False runs the readable NumPy reference (``_sample_problem`` then
-    #: ``FrozenEncoders.update``; ``_supervised_numpy``), which the tests compare it to.
+    #: ``FrozenEncoders.update``; :func:`.command.reference_torque`), which the tests compare it to.
     compiled = True
 
     def __init__(
@@ -260,19 +265,25 @@ class SafetySupervisor:
         """The supervised torque [Nm], or None after latching a fault (bad input or torque).
 
         One compiled pass (:func:`.command.supervised_torque`) when the model is given and
-        the shapes fit; else, and for a bad input (to spell out why), the NumPy reference.
+        the shapes fit; else, and for a bad input (to spell out why), the NumPy reference
+        (:func:`.command.reference_torque`). Then the events of both, alike.
         """
-        n = self.n
-        if (not self.compiled or model is None or q.shape != (n,) or qd.shape != (n,)
-                or tau_desired.shape != (n,)):  # fmt: skip
-            return self._supervised_numpy(q, qd, tau_desired, model)
-        out, inside, fast = np.empty(n), self._inside, self._fast
-        teaching = self.state is SupervisorState.TEACHING
-        status, speed, any_fast, any_inside = supervised_torque(q, qd, tau_desired, model.mass,
-            model.gravity, model.tool_jacobian, self._bounds, self._command_scalars, teaching,
-            out, inside, fast)  # fmt: skip
+        n, teaching = self.n, self.state is SupervisorState.TEACHING
+        status = BAD_INPUT
+        if (self.compiled and model is not None and q.shape == (n,) and qd.shape == (n,)
+                and tau_desired.shape == (n,)):  # fmt: skip
+            out, inside, fast = np.empty(n), self._inside, self._fast
+            status, speed, any_fast, any_inside = supervised_torque(q, qd, tau_desired,
+                model.mass, model.gravity, model.tool_jacobian, self._bounds,
+                self._command_scalars, teaching, out, inside, fast)  # fmt: skip
         if status == BAD_INPUT:
-            return self._supervised_numpy(q, qd, tau_desired, model)
+            if self._input_problem(q, qd, tau_desired) is not None:
+                return None
+            model = model or self.dynamics.snapshot(q, qd)
+            status, speed, out, inside, fast = reference_torque(self._limits,
+                self._command_scalars, q, qd, tau_desired, model.mass, model.gravity,
+                model.tool_jacobian, teaching)  # fmt: skip
+            any_fast, any_inside = bool(fast.any()), bool(inside.any())
         self._q_last_good = q
         if any_fast or "joint_speed" in self._active:
             self._log_joint_speed(qd, fast.copy())
@@ -286,50 +297,6 @@ class SafetySupervisor:
             return None
         return out
 
-    def _supervised_numpy(
-        self, q: FloatArray, qd: FloatArray, tau_desired: FloatArray, model: ModelSnapshot | None
-    ) -> FloatArray | None:
-        """:meth:`_supervised` with the NumPy functions of :mod:`.braking` (the reference)."""
-        if self._input_problem(q, qd, tau_desired) is not None:
-            return None
-        self._q_last_good = q
-        if model is None:
-            model = self.dynamics.snapshot(q, qd)
-        mass = model.mass
-        inertia = mass.diagonal()
-        tau = self._limits.saturated(tau_desired)  # a huge command cannot swamp the safety
-        braking_torque = self._joint_braking(qd, inertia)
-        if self.state is SupervisorState.TEACHING:
-            braking_torque = _sum(braking_torque, self._tool_braking(model.tool_jacobian, qd, mass))
-        if braking_torque is not None:
-            braked = braking_torque != 0.0
-            if np.count_nonzero(braked):
-                # while braking, the brakes win: the controller's torque on a braked joint is
-                # replaced by gravity compensation, so no controller can push through the limit
-                tau = np.where(braked, model.gravity, tau)
-        safety = _sum(self._walls(q, qd, inertia), braking_torque)
-        if safety is not None:
-            tau = tau + safety
-        if np.count_nonzero(np.isfinite(tau)) != tau.size:
-            self._fault("non-finite safety torque")
-            return None
-        return self._limits.saturated(tau)  # type: ignore[arg-type]
-
-    def _walls(self, q: FloatArray, qd: FloatArray, inertia: FloatArray) -> FloatArray | None:
-        """The soft walls' torque [Nm] (see :func:`.braking.walls`), logging each entry.
-
-        None (no torque) while no joint is inside a wall, nor was the period before.
-        """
-        limits = self._limits
-        if "soft_limit" not in self._active and within_bounds(
-            q, limits.wall_low, limits.wall_high, 0
-        ):
-            return None
-        damping_time = self.parameters.wall_damping_time
-        torque, inside = braking.walls(limits, q, qd, inertia, damping_time)
-        self._log_walls(q, inside)
-        return torque
-
     def _log_walls(self, q: FloatArray, inside: NDArray[np.bool_]) -> None:
         """One event for each joint that entered a wall this period."""
         limits, robot = self._limits, self.robot
@@ -339,41 +306,12 @@ class SafetySupervisor:
             detail = f"joint {i + 1} entered the {side} soft limit at {q[i]:.4g} rad"
             self._log("soft_limit", f"{detail} (hard limit {hard:.4g} rad)")
 
-    def _joint_braking(self, qd: FloatArray, inertia: FloatArray) -> FloatArray | None:
-        """Joint braking torque [Nm] (see :func:`.braking.joint_braking`), logging each episode.
-
-        None (no torque) while no joint is too fast, nor was the period before.
-        """
-        limits = self._limits
-        if "joint_speed" not in self._active and within_bounds(
-            qd, limits.speed_low, limits.speed, 0
-        ):
-            return None
-        braking_time = self.parameters.braking_time
-        torque, fast = braking.joint_braking(limits, qd, inertia, braking_time)
-        self._log_joint_speed(qd, fast)
-        return torque
-
     def _log_joint_speed(self, qd: FloatArray, fast: NDArray[np.bool_]) -> None:
         """One event for each joint that became too fast this period."""
         speed = self._limits.speed
         for i in self._started("joint_speed", fast):
             detail = f"joint {i + 1} speed {abs(qd[i]):.4g} rad/s above {speed[i]:.4g} rad/s"
             self._log("joint_speed", f"{detail}: braking")
-
-    def _tool_braking(
-        self, jacobian: FloatArray, qd: FloatArray, mass: FloatArray
-    ) -> FloatArray | None:
-        """Tool braking torque [Nm] (see :func:`.braking.tool_braking`), logging each episode.
-
-        ``jacobian`` is the TCP's (6, n): the tool tip, not the flange, is limited. None
-        (no torque) while the tool is within its speed limit.
-        """
-        p = self.parameters
-        limit = p.tool_speed_limit
-        torque, speed = braking.tool_braking(jacobian, mass, qd, limit, p.braking_time)
-        self._log_tool_speed(speed)
-        return torque if speed > limit else None
 
     def _log_tool_speed(self, speed: float) -> None:
         """Keep the largest tool speed [m/s]; an event when it goes above the limit."""
@@ -466,13 +404,6 @@ class SafetySupervisor:
     def _clear_episodes(self) -> None:
         self._encoders.clear()
         self._active: dict[str, NDArray[np.bool_]] = {}
-
-
-def _sum(a: FloatArray | None, b: FloatArray | None) -> FloatArray | None:
-    """``a + b`` of two torques [Nm], None standing for no torque (zeros)."""
-    if a is None or b is None:
-        return b if a is None else a
-    return a + b
 
 
 #: Placeholder reason while a fault is latched: ``_fault`` keeps the first reason only.
