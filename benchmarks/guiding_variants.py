@@ -14,6 +14,7 @@ something the defaults keep (see README).
 from __future__ import annotations
 
 import dataclasses
+import functools
 from typing import Any
 
 import numpy as np
@@ -137,14 +138,17 @@ class _ToolWrenchPriorLaw(ActiveLaw):
     prior = np.diag([30.0**2] * 3 + [3.0**2] * 3)
     anywhere = 0.1
 
+    @functools.cached_property
+    def _dynamics(self) -> lt.Dynamics:
+        """A model of the arm for the TCP Jacobian (the law is not handed one)."""
+        return lt.Dynamics(self.robot)
+
     def _update_drive(self, estimate: Any, q: Any, qd: Any, gravity: Any) -> None:
         super()._update_drive(estimate, q, qd, gravity)  # bias learning and the residual
         p = self.parameters
         residual = _unweighted(self.drive, self.weight)
         uncertainty = (self._rest_tolerance + self.model_error.tolerance(gravity)
                        + self.friction.coulomb_uncertainty(qd, q))  # fmt: skip
-        if not hasattr(self, "_dynamics"):
-            self._dynamics = lt.Dynamics(self.robot)
         jacobian = self._dynamics.snapshot(q, qd).tool_jacobian
         covariance = jacobian.T @ self.prior @ jacobian + self.anywhere**2 * np.eye(q.size)
         gain = np.linalg.solve(covariance + np.diag(uncertainty**2), covariance).T

@@ -1,19 +1,19 @@
-"""The active law of :class:`~leadthrough.control.lead_through.LeadThrough`, compiled.
+"""The active law (:class:`~leadthrough.control.active_law.ActiveLaw`), compiled.
 
 Two kernels do, per joint and in one pass, what the readable NumPy code of the controller
 does in some forty vector operations and a 7×7 solve (the reference, which the tests hold
 these to at 1e-12):
 
-* :func:`operator_drive` is ``LeadThrough._update_drive``: learn the model-error bias
+* :func:`operator_drive` is ``ActiveLaw._update_drive``: learn the model-error bias
   (:class:`~leadthrough.control.bias.ModelErrorBias`), remove it through the dead-zone,
   remove the friction the model may overstate, weigh the residual by the model's own
   uncertainty (:func:`~leadthrough.control.admittance.operator_weight`);
-* :func:`admittance_law` is ``LeadThrough._admittance``: ignore an end-stop's reaction,
+* :func:`admittance_law` is ``ActiveLaw._admittance``: ignore an end-stop's reaction,
   re-anchor lost references, integrate the admittance (:func:`~leadthrough.control.
   admittance.admittance_step`, the (k_M M + dt D̃) system solved by Gaussian elimination
   with partial pivoting), cap and bound the references, and the PD that tracks them.
 
-Both work in place on the controller's state (arrays preallocated once) and take its
+Both work in place on the law's state (arrays preallocated once) and take its
 constants packed in one (7, n) array of per-joint rows and one array of scalars (see
 :data:`JOINT_ROWS`, :data:`DRIVE_SCALARS`, :data:`ADMITTANCE_SCALARS`): a call costs
 ~1 µs of dispatch, not one per argument.
