@@ -15,6 +15,7 @@ friction (see :mod:`leadthrough.experiments.guiding`). Per case and as median / 
 Usage:
     python benchmarks/guiding_quality.py [--cases quick] [--save out.json] [--compare old.json]
         [--factory module:function]   (the active controller: function(robot, mode))
+        [--robot NAME] [--seeds 5-8]  (another arm; plants not developed on)
 """
 
 from __future__ import annotations
@@ -56,10 +57,25 @@ def print_summary(stats: dict[str, dict[str, float]], old: dict | None) -> None:
         print(f"{name:<11}{s['median']:>9.3g}{s['worst']:>9.3g}  {goal:<38}{met:>4}{before}")
 
 
+def parse_seeds(text: str) -> list[int]:
+    """``"5-8"`` → [5, 6, 7, 8]; ``"5,9"`` → [5, 9]."""
+    seeds: list[int] = []
+    for part in text.split(","):
+        low, _, high = part.partition("-")
+        seeds += range(int(low), int(high or low) + 1)
+    return seeds
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", choices=("full", "quick"), default="full")
     parser.add_argument("--robot", default="yumi", help="a registered robot (default yumi)")
+    parser.add_argument(
+        "--seeds",
+        default="1-4",
+        help="plant seeds of the full set, e.g. 5-8 or 5,9 (default 1-4, the development "
+        "seeds; others are plants the defaults were not developed on)",
+    )
     parser.add_argument("--save", help="write the per-case figures and the summary to JSON")
     parser.add_argument("--compare", help="a JSON saved before: print its summary alongside")
     parser.add_argument(
@@ -72,7 +88,8 @@ def main(argv: list[str] | None = None) -> None:
     if args.factory:
         module, _, name = args.factory.partition(":")
         factory = getattr(importlib.import_module(module), name)
-    total, start = len(cases(args.cases)), time.perf_counter()
+    seeds = parse_seeds(args.seeds)
+    total, start = len(cases(args.cases, seeds)), time.perf_counter()
 
     def report(name: str, figures: dict[str, float]) -> None:
         print(row(name, figures), flush=True)
@@ -83,7 +100,7 @@ def main(argv: list[str] | None = None) -> None:
 
     reported: list[str] = []
     print(HEADER)
-    results, stats = evaluate(args.cases, factory, robots.load(args.robot), report=report)
+    results, stats = evaluate(args.cases, factory, robots.load(args.robot), report, seeds)
     old = None
     if args.compare:
         with open(args.compare) as handle:
