@@ -8,7 +8,8 @@ friction (see :mod:`leadthrough.experiments.guiding`). Per case and as median / 
 - vibration: RMS tool velocity above 4 Hz, active / passive (goal ≤ 1.5 in every case);
 - peak tool speed over the path's peak (goal ≤ 1.3 × path + 0.02 m/s);
 - residual hand force during the hold, active − passive [N] (goal: median ≤ 0);
-- release at speed: stop time (goal ≤ 0.5 s) and drift over 10 s (goal < 1 mrad);
+- release at speed: stop time (goal ≤ 0.5 s) and drift over 10 s (goal < 1 mrad), of
+  both modes;
 - the observer (active run): RMS error over the peak operator torque (≤ 10 %), ±2 std
   coverage of moving samples (90–99 %), median std over the peak (≤ 30 %).
 
@@ -30,7 +31,7 @@ from leadthrough.experiments.guiding import GOALS, cases, evaluate
 from leadthrough.model import robots
 
 HEADER = (f"{'case':<30}{'effort a/p':>11}{'vib a/p':>9}{'speed p|a':>12}"
-          f"{'resid p|a N':>13}{'stop s':>8}{'drift mrad':>11}{'obs rms':>8}{'cov':>6}"
+          f"{'resid p|a N':>13}{'stop p|a s':>11}{'drift p|a mrad':>15}{'obs rms':>8}{'cov':>6}"
           f"{'std':>6}{'cal':>5}")  # fmt: skip
 
 
@@ -39,14 +40,15 @@ def row(name: str, f: dict[str, float]) -> str:
     return (f"{name:<30}{f['effort']:>11.2f}{f['vibration']:>9.2f}"
             f"{f['speed_passive']:>6.2f}|{f['speed']:<5.2f}"
             f"{f['residual_passive']:>7.1f}|{f['residual_active']:<5.1f}"
-            f"{f['stop']:>8.2f}{f['drift']:>11.2f}{100 * f['obs_rms']:>7.0f}%"
+            f"{f['stop_passive']:>6.2f}|{f['stop']:<4.2f}"
+            f"{f['drift_passive']:>8.2f}|{f['drift']:<6.2f}{100 * f['obs_rms']:>7.0f}%"
             f"{100 * f['obs_cov']:>5.0f}%{100 * f['obs_std']:>5.0f}%"
             f"{'yes' if f['calibrated'] else 'NO':>5}")  # fmt: skip
 
 
 def print_summary(stats: dict[str, dict[str, float]], old: dict | None) -> None:
     """Median / worst with the goals (and the compared run's, when given)."""
-    print(f"\n{'figure':<11}{'median':>9}{'worst':>9}  {'goal':<38}{'met':>4}"
+    print(f"\n{'figure':<14}{'median':>9}{'worst':>9}  {'goal':<38}{'met':>4}"
           + ("   before: median / worst" if old else ""))  # fmt: skip
     for name, _, goal, check in GOALS:
         s = stats[name]
@@ -54,7 +56,7 @@ def print_summary(stats: dict[str, dict[str, float]], old: dict | None) -> None:
         before = ""
         if old and name in old:
             before = f"   {old[name]['median']:.3g} / {old[name]['worst']:.3g}"
-        print(f"{name:<11}{s['median']:>9.3g}{s['worst']:>9.3g}  {goal:<38}{met:>4}{before}")
+        print(f"{name:<14}{s['median']:>9.3g}{s['worst']:>9.3g}  {goal:<38}{met:>4}{before}")
 
 
 def parse_seeds(text: str) -> list[int]:

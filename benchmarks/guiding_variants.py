@@ -96,11 +96,6 @@ def strong_dither(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
     return _build(robot, mode, dither={"amplitude": 0.6})
 
 
-def drive_gain_on_gravity(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
-    """Gravity error 15 % of its change (masses 5 % + drive gains 10 %), default 5 %."""
-    return _build(robot, mode, mass_uncertainty=0.15)
-
-
 class _OwnCalibrationObserver(lt.LeadThrough):
     """Guides with its own observer; the calibration reads the default observer."""
 

@@ -127,12 +127,16 @@ def _velocities(rng: np.random.Generator, k: int, n: int) -> np.ndarray:
 
 
 def _feed_forward_run(parameters: DitherParameters | None, clock: bool, compiled: bool,
-                      delay: int | None) -> np.ndarray:  # fmt: skip
-    """Parts, total and dither state over 10 000 seeded periods (NaN speeds too)."""
+                      delay: int | None, capped: bool) -> np.ndarray:  # fmt: skip
+    """Parts, total and dither state over 10 000 seeded periods (NaN speeds too).
+
+    ``capped``: a compensation ceiling, with gravity references of every size (or none).
+    """
     robot = lt.robots.yumi()
     rng = np.random.default_rng(21)
     feed_forward = PassiveFeedForward(lt.Dynamics(robot), _cable(robot), 0.004,
-                                      dither=parameters, measurement_delay=delay)  # fmt: skip
+        dither=parameters, measurement_delay=delay, friction_error=np.linspace(0.1, 0.3, 7),
+        gravity_uncertainty=0.15 if capped else None)  # fmt: skip
     feed_forward.compiled = compiled
     dither, rows = feed_forward.dither, []
     for k in range(10000):
@@ -140,7 +144,10 @@ def _feed_forward_run(parameters: DitherParameters | None, clock: bool, compiled
         qd = _velocities(rng, k, 7) * (1.0, 0.3)[k % 2]  # through the dead-band and the ramp
         if k % 997 == 5:
             qd[k % 7] = np.nan  # a NaN speed: moving, as in NumPy
-        parts = feed_forward.step(q, qd, None, 1.7e9 + 0.004 * k if clock else None)
+        reference = None if k % 3 == 0 else rng.normal(0.0, (1.0, 5.0)[k % 2], 7)
+        if k % 1009 == 7 and reference is not None:
+            reference[k % 7] = np.nan
+        parts = feed_forward.step(q, qd, None, 1.7e9 + 0.004 * k if clock else None, reference)
         state = [] if dither is None else [dither.active, [dither.parked]]
         if delay is not None:
             state.append(parts.dither_in_measurement)
@@ -149,14 +156,25 @@ def _feed_forward_run(parameters: DitherParameters | None, clock: bool, compiled
 
 
 @pytest.mark.parametrize(
-    "park_time, clock, dithered, delay",
-    [(2.0, True, True, None), (None, True, True, 2), (0.5, False, True, 1), (2.0, True, False, 2)],
+    "park_time, clock, dithered, delay, capped",
+    [
+        (2.0, True, True, None, False),
+        (None, True, True, 2, False),
+        (0.5, False, True, 1, True),
+        (2.0, True, False, 2, True),
+    ],
 )
-def test_compiled_feed_forward_equals_the_numpy_reference(park_time, clock, dithered, delay):
+def test_compiled_feed_forward_equals_the_numpy_reference(park_time, clock, dithered, delay,
+                                                          capped):  # fmt: skip
     """10 000 periods (rest, park, joints starting and stopping): same torques, same state."""
     parameters = DitherParameters(park_time=park_time) if dithered else None
-    compiled = _feed_forward_run(parameters, clock, True, delay)
-    reference = _feed_forward_run(parameters, clock, False, delay)
+    compiled = _feed_forward_run(parameters, clock, True, delay, capped)
+    reference = _feed_forward_run(parameters, clock, False, delay, capped)
+    if capped:  # the ceiling binds in some periods, not in all
+        free = _feed_forward_run(parameters, clock, False, delay, False)
+        moving = np.abs(free[:, :7]) > 1e-9
+        lower = np.abs(reference[:, :7]) < np.abs(free[:, :7]) - 1e-9
+        assert 0.05 < np.mean(lower[moving]) < 0.95
     if dithered:
         assert 0.05 < np.mean(reference[:, 21:28]) < 0.95  # both decisions are taken
         assert reference[:, 28].any() == (park_time is not None)

@@ -14,7 +14,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 import guiding_variants
 
 FACTORIES = ("no_weighting", "full_residual", "long_stroke", "long_stroke_trusted",
-             "strong_dither", "drive_gain_on_gravity", "tool_wrench_prior",
+             "strong_dither", "tool_wrench_prior",
              "smooth_rate_guiding")  # fmt: skip
 
 

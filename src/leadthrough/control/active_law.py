@@ -49,6 +49,8 @@ class ActiveLaw:
             bound the viscous part of the friction margin).
 
     Attributes:
+        friction_error: Relative error of the friction levels in use, per joint [–] (the
+            model's, or ``friction_uncertainty``; at least ``stiction_margin``).
         model_error: The bias learned while nobody guides (and by the calibration).
         drive: Operator torque that drives the admittance [Nm].
         weight: Operator weight of every joint [–].
@@ -74,7 +76,7 @@ class ActiveLaw:
         self._reference_high = robot.q_max - parameters.limit_zone
         self._speed_cap = parameters.assist_speed_fraction * robot.velocity_limits
         p = parameters  # the scalars of the compiled law (fused.DRIVE/ADMITTANCE_SCALARS)
-        self._drive_scalars = np.array([p.mass_uncertainty, dt, p.bias_time,
+        self._drive_scalars = np.array([p.gravity_uncertainty, dt, p.bias_time,
                                         p.drive_gain_uncertainty, p.assist_knee])  # fmt: skip
         self._admittance_scalars = np.array([float(p.limit_aware), p.reanchor_error,
             p.damping_time, p.rest_damping, p.inertia_scale, dt,
@@ -91,7 +93,7 @@ class ActiveLaw:
         relative = (friction.relative_error if p.friction_uncertainty is None
                     else np.full(self.n, p.friction_uncertainty))  # fmt: skip
         relative = np.maximum(relative, p.stiction_margin)
-        self._friction_relative = relative
+        self.friction_error = relative
         self._viscous_relative = np.maximum(self.nominal_friction.relative_error,
                                             p.stiction_margin)  # fmt: skip
         self._friction_tolerance = relative * friction.coulomb + 2.0 * friction.noise_std
@@ -103,7 +105,7 @@ class ActiveLaw:
     def reset(self) -> None:
         """Forget the bias, the weights and the references."""
         p, n = self.parameters, self.n
-        self.model_error = ModelErrorBias(n, p.bias_time, p.mass_uncertainty)
+        self.model_error = ModelErrorBias(n, p.bias_time, p.gravity_uncertainty)
         self.drive = np.zeros(n)
         self.weight = np.zeros(n)
         self.feedback = np.zeros(n)
@@ -175,7 +177,7 @@ class ActiveLaw:
         (≈ τ_C at rest, where friction may hold any push of that size unseen, → 0 moving).
         """
         p = self.parameters
-        plausible = self._friction_tolerance + p.mass_uncertainty * np.abs(gravity)
+        plausible = self._friction_tolerance + p.gravity_uncertainty * np.abs(gravity)
         clear_of_limits = bool(np.all((q > self._reference_low) & (q < self._reference_high)))
         unguided = (1.0 - float(np.max(self.weight))) ** 2 if clear_of_limits else 0.0
         self.model_error.update(estimate, gravity, self.dt, 2.0 * plausible, unguided)
@@ -196,7 +198,7 @@ class ActiveLaw:
         """
         viscous = self.friction.viscous * qd
         coulomb = self.friction.mean(qd, q) - viscous
-        return self._friction_relative * coulomb + self._viscous_relative * viscous
+        return self.friction_error * coulomb + self._viscous_relative * viscous
 
     def _admittance(
         self, q: FloatArray, qd: FloatArray, drive: FloatArray, mass: FloatArray

@@ -6,9 +6,10 @@ friction level that is off while the released arm still moves. Fed to an admitta
 that becomes motion (SPEC §6). This component learns it as a bias, as fast as nobody
 guides (at rest, or coasting after a release), and says how much error may remain:
 before anything is learned,
-the whole uncertainty of the gravity model (``mass_uncertainty · |G(q)|``); once the
+the whole uncertainty of the gravity model (``gravity_uncertainty · |G(q)|``: masses and
+drive gains); once the
 bias is learned at a pose, only the uncertainty of how gravity *changed* since then
-(``mass_uncertainty · |G(q) − G(q_learned)|``). The dead-zone of the controller uses it.
+(``gravity_uncertainty · |G(q) − G(q_learned)|``). The dead-zone of the controller uses it.
 """
 
 from __future__ import annotations
@@ -24,12 +25,12 @@ class ModelErrorBias:
     Args:
         n_joints: Number of joints.
         learning_time: Time constant of the learning [s] (when nobody guides at all).
-        mass_uncertainty: Relative error of the gravity model [–].
+        gravity_uncertainty: Relative error of the gravity model [–] (masses, drive gains).
     """
 
-    def __init__(self, n_joints: int, learning_time: float, mass_uncertainty: float) -> None:
+    def __init__(self, n_joints: int, learning_time: float, gravity_uncertainty: float) -> None:
         self.learning_time = learning_time
-        self.mass_uncertainty = mass_uncertainty
+        self.gravity_uncertainty = gravity_uncertainty
         self.bias = np.zeros(n_joints)
         self.confidence = 0.0  # 0: nothing learned, → 1 after a few learning times at rest
         #: G at the poses the bias was learned, weighted as it was learned [Nm]
@@ -79,4 +80,4 @@ class ModelErrorBias:
         unknown = np.abs(gravity)
         changed = np.abs(gravity - self.gravity_learned)
         gravity_error = (1.0 - self.confidence) * unknown + self.confidence * changed
-        return self.mass_uncertainty * gravity_error
+        return self.gravity_uncertainty * gravity_error

@@ -12,7 +12,11 @@ from numpy.typing import ArrayLike
 from leadthrough.compiled import kernel
 from leadthrough.control.dither import Dither, DitherParameters
 from leadthrough.errors import ParameterError
-from leadthrough.friction.compensation import CoulombCompensation, CoulombCompensationParameters
+from leadthrough.friction.compensation import (
+    CoulombCompensation,
+    CoulombCompensationParameters,
+    compensation_ceiling,
+)
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray
 from leadthrough.model.dynamics import Dynamics
@@ -131,6 +135,12 @@ class PassiveFeedForward:
             period late (the thesis' interface, the twin's default), a command sent at step
             k is applied over the next period and measured at step k + 2. None: the caller
             keeps the delay line (``dither_in_measurement`` is then None).
+        friction_error: Relative error of the Coulomb levels [–] (scalar or per joint) for
+            the compensation's ceiling; default the friction model's ``relative_error``.
+        gravity_uncertainty: Relative error of G(q) [–] (masses, drive gains): with it the
+            Coulomb compensation stays below its ceiling (the friction surely there minus
+            ``gravity_uncertainty · |G(q) − G_ref|``, see :meth:`step`), so that a released
+            joint still stops. None: no ceiling (the thesis' law).
     """
 
     #: Run :meth:`step` compiled (:func:`_feed_forward_step`); False runs the NumPy reference.
@@ -144,9 +154,15 @@ class PassiveFeedForward:
         compensation: CoulombCompensationParameters | None = None,
         dither: DitherParameters | None = None,
         measurement_delay: int | None = 2,
+        friction_error: ArrayLike | None = None,
+        gravity_uncertainty: float | None = None,
     ) -> None:
         self.dynamics = dynamics
         self.friction = friction or FrictionModel.from_robot(dynamics.robot)
+        relative = self.friction.relative_error if friction_error is None else friction_error
+        self.friction_error = np.broadcast_to(np.asarray(relative, dtype=float),
+                                              (dynamics.n,)).copy()  # fmt: skip
+        self.gravity_uncertainty = gravity_uncertainty
         self.compensation = CoulombCompensation(self.friction, compensation, dt)
         self.dither = None if dither is None else Dither(self.friction, dt, dither)
         n = dynamics.n
@@ -157,8 +173,10 @@ class PassiveFeedForward:
             dither_settings.moving_velocity if dither_settings else law.dead_band,
             dither_settings.rest_time if dither_settings else 0.0,
             math.inf if park_time is None else park_time, dt, law.dead_band, law.fraction,
-            law.full_velocity, self.compensation.pole])  # fmt: skip
+            law.full_velocity, self.compensation.pole,
+            math.nan if gravity_uncertainty is None else gravity_uncertainty])  # fmt: skip
         self._no_rest = np.full(n, np.nan)  # the dither's state when there is no dither
+        self._no_reference = np.zeros(n)
         self._no_active = np.zeros(n, dtype=bool)
 
     def reset(self) -> None:
@@ -175,6 +193,7 @@ class PassiveFeedForward:
         qd: ArrayLike,
         model: ModelSnapshot | None = None,
         t: float | None = None,
+        gravity_reference: FloatArray | None = None,
     ) -> FeedForwardTorques:
         """The feed-forward for joint readings q [rad] and velocities q̇ [rad/s].
 
@@ -184,34 +203,49 @@ class PassiveFeedForward:
             model: The model at (q, q̇) computed this period, if the caller has it.
             t: Time of the sample [s] (the dither's clock); default: the dither counts
                 its own periods.
+            gravity_reference: G where the gravity model's error was last measured (the
+                start-up calibration's pose) [Nm]: the model may be off by
+                ``gravity_uncertainty`` times the change since. None: zero (all of G).
         """
         q, velocity = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
         gravity = self.dynamics.gravity(q) if model is None else model.gravity
         dither = self.dither
         now, wave = (0.0, 0.0) if dither is None else dither.clock(t)
+        reference = self._no_reference if gravity_reference is None else gravity_reference
         if not (self.compiled and math.isfinite(now) and velocity.shape == gravity.shape
                 and q.shape == gravity.shape):  # fmt: skip
-            return self._numpy_step(q, velocity, gravity, now, wave)
+            return self._numpy_step(q, velocity, gravity, now, wave, reference)
         parts = np.empty((3, gravity.shape[0]))  # friction, dither, total
-        compensation = self.compensation
+        compensation, errors = self.compensation, (self.friction_error, reference)
         level = compensation.friction.coulomb_level(q)
         if dither is None:
-            _feed_forward_step(velocity, level, gravity, self._no_rest, self._no_active,
-                               compensation.filtered, parts, False, 0.0, math.nan, 0.0,
-                               self._scalars)  # fmt: skip
+            _feed_forward_step(velocity, level, gravity, *errors, self._no_rest,
+                               self._no_active, compensation.filtered, parts, False, 0.0,
+                               math.nan, 0.0, self._scalars)  # fmt: skip
         else:
             amplitude = wave * dither.parameters.amplitude
-            dither.quiet_since = _feed_forward_step(velocity, level, gravity, dither.rest_since,
-                dither.active, compensation.filtered, parts, True, now, dither.quiet_since,
-                amplitude, self._scalars)  # fmt: skip
+            dither.quiet_since = _feed_forward_step(velocity, level, gravity, *errors,
+                dither.rest_since, dither.active, compensation.filtered, parts, True, now,
+                dither.quiet_since, amplitude, self._scalars)  # fmt: skip
         torques = FeedForwardTorques(gravity, parts[0], parts[1], self._measured(parts[1]))
         torques.__dict__["total"] = parts[2]  # the cached sum, computed by the kernel
         return torques
 
     def _numpy_step(
-        self, q: FloatArray, qd: FloatArray, gravity: FloatArray, now: float, wave: float
+        self,
+        q: FloatArray,
+        qd: FloatArray,
+        gravity: FloatArray,
+        now: float,
+        wave: float,
+        reference: FloatArray,
     ) -> FeedForwardTorques:
         """:meth:`step` with the NumPy code of :class:`Dither` and :class:`CoulombCompensation`."""
+        ceiling = None
+        if self.gravity_uncertainty is not None:
+            gravity_error = self.gravity_uncertainty * np.abs(gravity - reference)
+            level = self.compensation.friction.coulomb_level(q)
+            ceiling = compensation_ceiling(level, self.friction_error, gravity_error)
         if self.dither is None:
             dither, dead_band = np.zeros(self.dynamics.n), None
         else:
@@ -219,8 +253,8 @@ class PassiveFeedForward:
             base = self.compensation.parameters.dead_band
             dead_band = np.where(self.dither.active, self.dither.parameters.moving_velocity, base)
         # (gravity, friction, dither, dither_in_measurement), positional: the cheaper call
-        return FeedForwardTorques(gravity, self.compensation.step(qd, q, dead_band), dither,
-                                  self._measured(dither))  # fmt: skip
+        return FeedForwardTorques(gravity, self.compensation.step(qd, q, dead_band, ceiling),
+                                  dither, self._measured(dither))  # fmt: skip
 
     def _measured(self, dither: FloatArray) -> FloatArray | None:
         """The dither the measured torque holds now, after recording this period's."""
@@ -233,12 +267,13 @@ class PassiveFeedForward:
 
 #: Scalars of :func:`_feed_forward_step`, in order (``park_time`` inf: never parks).
 FEED_FORWARD_SCALARS = ("moving_velocity", "rest_time", "park_time", "dt", "dead_band",
-                        "fraction", "full_velocity", "pole")  # fmt: skip
+                        "fraction", "full_velocity", "pole", "gravity_uncertainty")  # fmt: skip
 
 
 @kernel
-def _feed_forward_step(qd, level, gravity, rest_since, active, filtered, parts, dithering, now,
-                       quiet_since, amplitude, scalars):  # fmt: skip
+def _feed_forward_step(qd, level, gravity, friction_error, reference, rest_since, active,
+                       filtered, parts, dithering, now, quiet_since, amplitude,
+                       scalars):  # fmt: skip
     """One period of :class:`PassiveFeedForward`, in place; returns the new ``quiet_since``.
 
     The same decisions and arithmetic, in the same order, as the NumPy reference
@@ -247,12 +282,17 @@ def _feed_forward_step(qd, level, gravity, rest_since, active, filtered, parts, 
     park (``quiet_since`` NaN: not every joint rests; ``park_time`` inf: never), the
     rested joints and their dither ``amplitude · τ_C(q)`` [Nm] (``amplitude`` signed by
     the wave), each "lasted" test ``elapsed + dt >= duration − dt / 2``; the compensation
-    ramp ends at ``max(q̇₁, 2 q̇₀)``, then the low-pass filter. ``parts`` gets the rows
+    ramp ends at ``max(q̇₁, 2 q̇₀)``, the level ``ε τ_C`` capped by
+    :func:`~leadthrough.friction.compensation.compensation_ceiling` (its ``max(·, 0)`` as
+    written there; ``gravity_uncertainty`` NaN: no cap), then the low-pass filter.
+    ``parts`` gets the rows
     friction, dither and gravity + friction + dither [Nm]. Without ``dithering`` the
     dither state is not touched and the dead-band is q̇₀ on every joint.
     """
     moving_velocity, rest_time, park_time, dt = scalars[0], scalars[1], scalars[2], scalars[3]
     dead_band, fraction, full_velocity, pole = scalars[4], scalars[5], scalars[6], scalars[7]
+    gravity_uncertainty = scalars[8]
+    capped = gravity_uncertainty == gravity_uncertainty  # not NaN
     n = qd.shape[0]
     if dithering:
         every_joint_rests = True
@@ -279,7 +319,13 @@ def _feed_forward_step(qd, level, gravity, rest_since, active, filtered, parts, 
         ramp = ramp if ramp > 0.0 or ramp != ramp else 0.0
         ramp = ramp if ramp < 1.0 or ramp != ramp else 1.0
         sign = 1.0 if qd[i] > 0.0 else (-1.0 if qd[i] < 0.0 else qd[i])  # np.sign (NaN, ±0)
-        raw = ramp * sign * fraction * level[i]
+        compensated = fraction * level[i]
+        if capped:
+            surely = (1.0 - friction_error[i]) * level[i]
+            cap = surely - gravity_uncertainty * abs(gravity[i] - reference[i])
+            cap = cap if cap > 0.0 or cap != cap else 0.0  # np.maximum(·, 0)
+            compensated = compensated if compensated < cap or compensated != compensated else cap
+        raw = ramp * sign * compensated
         filtered[i] = pole * filtered[i] + (1.0 - pole) * raw
         parts[0, i], parts[1, i] = filtered[i], dither
         parts[2, i] = gravity[i] + filtered[i] + dither

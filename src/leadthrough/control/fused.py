@@ -31,7 +31,7 @@ from leadthrough.compiled import kernel
 JOINT_ROWS = ("friction_tolerance", "reference_low", "reference_high", "friction_relative",
               "viscous_relative", "rest_tolerance", "speed_cap")  # fmt: skip
 #: Scalars of :func:`operator_drive`, in order.
-DRIVE_SCALARS = ("mass_uncertainty", "dt", "bias_time", "drive_gain_uncertainty",
+DRIVE_SCALARS = ("gravity_uncertainty", "dt", "bias_time", "drive_gain_uncertainty",
                  "assist_knee")  # fmt: skip
 #: Scalars of :func:`admittance_law`, in order (``limit_aware`` as 0/1, ``position_gain``
 #: is (2π f)² [1/s²]).
@@ -62,7 +62,7 @@ def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, sc
         drive: Operator drive [Nm], written.
         feedback: The admittance's last tracking torque [Nm].
     """
-    mass_uncertainty, dt, bias_time, gain_uncertainty, knee = scalars
+    gravity_uncertainty, dt, bias_time, gain_uncertainty, knee = scalars
     n = q.shape[0]
     clear_of_limits, top, undefined = True, -math.inf, False
     for i in range(n):
@@ -74,7 +74,7 @@ def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, sc
     if unguided > 0.0:  # NaN learns nothing, as in ModelErrorBias.update
         rate = unguided * dt / bias_time
         for i in range(n):
-            bound = 2.0 * (joint[0, i] + mass_uncertainty * abs(gravity[i]))
+            bound = 2.0 * (joint[0, i] + gravity_uncertainty * abs(gravity[i]))
             learned = bias[i] + rate * (estimate[i] - bias[i])
             learned = learned if learned > -bound or learned != learned else -bound
             bias[i] = learned if learned < bound or learned != learned else bound
@@ -97,7 +97,7 @@ def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, sc
         residual = (residual - margin) - gain_uncertainty * feedback[i]
         unknown = abs(gravity[i])
         changed = abs(gravity[i] - gravity_learned[i])
-        tolerance = mass_uncertainty * ((1.0 - confidence) * unknown + confidence * changed)
+        tolerance = gravity_uncertainty * ((1.0 - confidence) * unknown + confidence * changed)
         uncertainty = (joint[5, i] + tolerance) + half_level * (upper[i] - lower[i])
         if knee == 0.0:
             w = 1.0

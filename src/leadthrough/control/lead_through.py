@@ -4,8 +4,10 @@ One step, in order, on the robot's sample (its time stamp is the one clock):
 
 1. the supervisor checks the sensor sample (a bad one → the safe stop, this period);
    the model of the arm at it is computed once (:meth:`Dynamics.snapshot`: G, M, Cᵀq̇,
-   the TCP Jacobian and pose) and handed to every step below;
-2. feed-forward ``τ_ff = G(q) + τ_fc(q̇) + dither`` (thesis eq. 6.3, §5.3);
+   the TCP Jacobian and pose; G with the start-up calibration's correction) and handed
+   to every step below;
+2. feed-forward ``τ_ff = G(q) + τ_fc(q̇) + dither`` (thesis eq. 6.3, §5.3), the Coulomb
+   compensation below the friction surely there minus the gravity error that may be;
 3. the Kalman observer estimates ``τ̂_ext`` from the measured torque (or the command
    sent, if the robot measures none), dither removed;
 4. the operator torque: model error must not become motion (a learned bias and the
@@ -114,10 +116,11 @@ class LeadThrough:
         self.dynamics = Dynamics(robot)
         self.supervisor.use_model(self.dynamics)  # one model: robot and dynamics agree
         self.friction = friction
-        self.feed_forward = PassiveFeedForward(self.dynamics, friction, self.dt, p.compensation,
-                                               p.dither, measurement_delay=None)  # fmt: skip
-        self.observer = MomentumObserver(self.dynamics, friction, self.dt, p.observer)
         self.law.use_friction(friction)
+        self.feed_forward = PassiveFeedForward(self.dynamics, friction, self.dt, p.compensation,
+            p.dither, measurement_delay=None, friction_error=self.law.friction_error,
+            gravity_uncertainty=p.gravity_uncertainty)  # fmt: skip
+        self.observer = MomentumObserver(self.dynamics, friction, self.dt, p.observer)
 
     # --- state a user may read ---------------------------------------------------------
 
@@ -160,8 +163,20 @@ class LeadThrough:
 
     @property
     def bias(self) -> FloatArray:
-        """Learned model-error bias [Nm]."""
+        """Model-error bias learned while nobody guides [Nm] (removed from the estimate)."""
         return self.law.model_error.bias.copy()
+
+    @property
+    def gravity_correction(self) -> FloatArray:
+        """What the start-up calibration added to the model's G(q) [Nm] (zeros without one).
+
+        The gravity error it measured at its pose (after the payload), ``−bias`` there:
+        feed-forward, observer and supervisor then hold the arm with the corrected model,
+        and away from that pose the model may be off by ``parameters.gravity_uncertainty``
+        times the change of G (the Coulomb compensation's ceiling).
+        """
+        correction = self._gravity_correction
+        return np.zeros(self.robot.n_joints) if correction is None else correction.copy()
 
     @property
     def state(self) -> SupervisorState:
@@ -198,6 +213,8 @@ class LeadThrough:
         self.model: ModelSnapshot | None = None  # the model at the latest sample
         self.last_feed_forward: FeedForwardTorques | None = None
         self.calibration: Calibration | None = None
+        self._gravity_correction: FloatArray | None = None  # [Nm], added to G(q)
+        self._gravity_reference: FloatArray | None = None  # G where it was measured [Nm]
         self._calibration_run: CalibrationRun | None = None
         self._calibration_start = 0.0  # [s], set when the first sample arrives
         self._calibrating = self.calibrate  # the supervisor stays in TEACHING
@@ -260,6 +277,8 @@ class LeadThrough:
         try:
             self._stage = "model"
             self.model = model = self.dynamics.snapshot(q, qd)
+            if self._gravity_correction is not None:  # the calibration's, see gravity_correction
+                np.add(model.gravity, self._gravity_correction, out=model.gravity)
             tau = None if tau_measured is None else np.asarray(tau_measured, dtype=float)
             if self._calibrating:
                 desired, dither = self._calibrate(t, model, tau), np.zeros(self.robot.n_joints)
@@ -321,8 +340,11 @@ class LeadThrough:
         robot = calibration.robot(self.robot)
         accuracy = self.parameters.calibration.friction_accuracy  # type: ignore[union-attr]
         self._build(robot, calibration.friction(self.nominal_friction, accuracy))
-        self.law.model_error.calibrate(calibration.bias,
-                                       self.dynamics.gravity(calibration.pose))  # fmt: skip
+        # the gravity error measured at the pose goes into the model, as the payload does:
+        # feed-forward, observer and supervisor all hold the arm with G(q) − bias
+        self._gravity_correction = -np.asarray(calibration.bias, dtype=float)
+        self._gravity_reference = self.dynamics.gravity(calibration.pose) - calibration.bias
+        self.law.model_error.calibrate(np.zeros(self.robot.n_joints), self._gravity_reference)
 
     def _control(
         self, t: float, model: ModelSnapshot, tau_measured: FloatArray | None
@@ -330,7 +352,7 @@ class LeadThrough:
         """The guiding command [Nm] and the dither it holds [Nm]."""
         q, qd = model.q, model.qd
         self._stage = "feed-forward"
-        feed_forward = self.feed_forward.step(q, qd, model, t)
+        feed_forward = self.feed_forward.step(q, qd, model, t, self._gravity_reference)
         self.last_feed_forward = feed_forward
         applied, dither = self._measured(tau_measured)
         self._stage = "observer"

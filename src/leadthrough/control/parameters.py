@@ -72,7 +72,8 @@ class LeadThroughParameters:
         drive_gain_uncertainty: Relative error of the drives' torque constants [–]: a drive
             that applies 10 % more than it reports makes 10 % of the tracking torque read
             as a push along it (positive feedback); that much of the last tracking torque
-            is taken off the estimate, so the error reads as drag instead.
+            is taken off the estimate, so the error reads as drag instead. The gravity
+            feed-forward is off by as much (:attr:`gravity_uncertainty`).
         position_bandwidth: K_P_ii = m_ii(q) (2π f)² [Hz]; 0 is damping control (§6.3.1).
         velocity_time: K_D_ii = m_ii(q) / velocity_time [s]: 20 rad/s, below the bandwidth
             of a differenced, filtered velocity (15–40 Hz); a stiffer velocity loop on that
@@ -80,8 +81,11 @@ class LeadThroughParameters:
         stiction_margin: Relative Coulomb error at rest that no sigmoid model describes
             (stiction, Stribeck) [–]; part of what the model may read without an operator,
             and the smallest friction error assumed.
-        mass_uncertainty: Relative error of the link masses [–]: the gravity error the model
-            may read without an operator.
+        mass_uncertainty: Relative error of the link masses [–]; with the drive gains', the
+            gravity error the model may read without an operator
+            (:attr:`gravity_uncertainty`). The Coulomb compensation stays below
+            ``(1 − friction error) τ_C − gravity_uncertainty |G(q) − G_ref|`` (G_ref: G at
+            the calibration's pose, 0 without one), so that a released arm stops.
         friction_uncertainty: Relative error of the friction levels [–]; None takes the
             friction model's own (``FrictionModel.relative_error``). That much of the
             modelled friction is taken off the estimate along the motion, so that a model
@@ -168,6 +172,18 @@ class LeadThroughParameters:
                                  "rest_velocity only (one definition of at rest)")  # fmt: skip
         dither = dataclasses.replace(self.dither, moving_velocity=self.rest_velocity)
         object.__setattr__(self, "dither", dither)
+
+    @property
+    def gravity_uncertainty(self) -> float:
+        """Relative error of the gravity torque the drives apply [–]: masses and drive gains.
+
+        ``mass_uncertainty + drive_gain_uncertainty``: a torque constant 10 % off applies
+        10 % less (or more) of the gravity feed-forward than the model says. The model
+        error the operator torque tolerates, the bias may learn, and the Coulomb
+        compensation leaves room for is this times G(q) (or its change since the
+        calibration measured the error).
+        """
+        return self.mass_uncertainty + self.drive_gain_uncertainty
 
     def check_robot(self, robot: RobotDescription) -> None:
         """Raise ParameterError (one line) for a setting that does not fit ``robot``.

@@ -9,6 +9,12 @@ joint moves faster than the velocity noise, so that the arm still stops when rel
 
 then smoothed by the filter H(z) of eq. (4.6) so that the operator feels no jolt when
 a joint starts moving. While dithering, the dead-band q̇₀ is widened (thesis §5.3).
+
+ε < 1 keeps the released arm stopping only if nothing else pushes it. A gravity model
+that is off by ΔG pushes too, so the compensated level may also be capped per joint by
+a **ceiling** [Nm] (:func:`compensation_ceiling`): the friction that is surely there,
+``(1 − e_f) τ_C``, minus the gravity error that may be, so that compensation plus model
+error never exceed the friction and a released joint still comes to rest.
 """
 
 from __future__ import annotations
@@ -55,13 +61,35 @@ def coulomb_compensation(
     fraction: float,
     dead_band: ArrayLike,
     full_velocity: ArrayLike,
+    ceiling: ArrayLike | None = None,
 ) -> FloatArray:
-    """The law above, unfiltered [Nm]; arrays broadcast over joints (and samples)."""
+    """The law above, unfiltered [Nm]; arrays broadcast over joints (and samples).
+
+    ``ceiling`` [Nm], if given, caps the compensated level ``ε τ_C`` per joint.
+    """
     qd = np.asarray(qd, dtype=float)
     dead_band = np.asarray(dead_band, dtype=float)
     ramp = (np.abs(qd) - dead_band) / (np.asarray(full_velocity) - dead_band)
     ramp = np.minimum(np.maximum(ramp, 0.0), 1.0)  # np.clip's result, at half its cost
-    return ramp * np.sign(qd) * fraction * np.asarray(coulomb, dtype=float)
+    level = fraction * np.asarray(coulomb, dtype=float)
+    if ceiling is not None:
+        level = np.minimum(level, ceiling)
+    return ramp * np.sign(qd) * level
+
+
+def compensation_ceiling(
+    coulomb: ArrayLike, friction_error: ArrayLike, gravity_error: ArrayLike
+) -> FloatArray:
+    """The most Coulomb compensation a released joint stops with [Nm], ≥ 0.
+
+    Args:
+        coulomb: The model's Coulomb levels τ_C(q) [Nm].
+        friction_error: Relative error of those levels [–]: the plant has at least
+            ``(1 − friction_error) τ_C``.
+        gravity_error: How far the gravity model may be off here [Nm].
+    """
+    surely = (1.0 - np.asarray(friction_error, dtype=float)) * np.asarray(coulomb, dtype=float)
+    return np.maximum(surely - np.asarray(gravity_error, dtype=float), 0.0)
 
 
 class CoulombCompensation:
@@ -105,7 +133,11 @@ class CoulombCompensation:
         return self._torque
 
     def step(
-        self, qd: ArrayLike, q: ArrayLike | None = None, dead_band: ArrayLike | None = None
+        self,
+        qd: ArrayLike,
+        q: ArrayLike | None = None,
+        dead_band: ArrayLike | None = None,
+        ceiling: ArrayLike | None = None,
     ) -> FloatArray:
         """Filtered compensation torque [Nm], (n,), for velocities q̇ [rad/s].
 
@@ -114,6 +146,8 @@ class CoulombCompensation:
             q: Joint positions [rad], for a position-dependent Coulomb level.
             dead_band: Per-joint q̇₀ overriding the parameter (widened while dithering);
                 the ramp then ends at ``max(q̇₁, 2 q̇₀)``.
+            ceiling: Per-joint cap on the compensated level [Nm]
+                (:func:`compensation_ceiling`); None: no cap.
         """
         p = self.parameters
         band: float | FloatArray
@@ -123,6 +157,7 @@ class CoulombCompensation:
         else:
             band = np.asarray(dead_band, dtype=float)
             full = np.maximum(p.full_velocity, 2.0 * band)
-        raw = coulomb_compensation(qd, self.friction.coulomb_level(q), p.fraction, band, full)
+        level = self.friction.coulomb_level(q)
+        raw = coulomb_compensation(qd, level, p.fraction, band, full, ceiling)
         self._torque = low_pass(self._torque, raw, self._pole)
         return self._torque.copy()
