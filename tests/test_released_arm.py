@@ -29,6 +29,7 @@ from leadthrough.twin.simulator import DigitalTwin
 #: Two cases where the passive arm ran away: one each mechanism stops.
 FAR_FROM_THE_POSE = Case("lugre", 1, "stiff", "sideways")  # G of joint 4 changes 1.9 Nm
 OFF_AT_THE_POSE = Case("dry", 7, "relaxed", "upwards")  # joint 3's G 12 % off already there
+UNCALIBRATED = Case("dry", 7, "stiff", "sideways")  # ran away 1.2 rad without a calibration
 
 
 class _Uncorrected(LeadThrough):
@@ -42,10 +43,10 @@ class _Uncorrected(LeadThrough):
             self._gravity_correction = None
 
 
-def _passive(cls=LeadThrough, **changes):
+def _passive(cls=LeadThrough, calibrate=True, **changes):
     def factory(robot, mode):
         parameters = dataclasses.replace(lt.LeadThroughParameters(), **changes)
-        return cls(robot, mode="passive", dt=0.004, parameters=parameters, calibrate=True)
+        return cls(robot, mode="passive", dt=0.004, parameters=parameters, calibrate=calibrate)
 
     return factory
 
@@ -55,6 +56,14 @@ def test_released_passive_arm_stops_and_stays(case):
     """The defaults: the passive arm let go at speed stops within 0.5 s, then stays."""
     result = run_case(case, "passive", _passive())
     assert result.stop_time <= 0.5 and result.drift < 1e-3
+
+
+def test_without_a_calibration_the_ceiling_counts_all_of_gravity():
+    """No calibration: G may be off by gravity_uncertainty · |G|; the arm still stops."""
+    result = run_case(UNCALIBRATED, "passive", _passive(calibrate=False))
+    assert result.stop_time <= 0.5 and result.drift < 1e-3
+    thesis = _passive(calibrate=False, mass_uncertainty=0.0, drive_gain_uncertainty=0.0)
+    assert run_case(UNCALIBRATED, "passive", thesis).drift > 0.1
 
 
 def test_without_the_ceiling_the_arm_far_from_the_calibration_pose_slides_on():
