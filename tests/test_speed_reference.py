@@ -47,7 +47,7 @@ def step_outputs(
     measured: bool = True,
     parameters: LeadThroughParameters | None = None,
 ) -> np.ndarray:
-    """Command, τ̂_ext and its std [Nm] of every period over a seeded random motion.
+    """Command, τ̂_ext and the filter's std [Nm] of every period over a seeded random motion.
 
     The arm rests, creeps, moves and swings fast in turns of 300 periods (tool speed
     braking included); ``fault_at`` puts a NaN in one position reading.
@@ -71,7 +71,7 @@ def step_outputs(
         if k == fault_at:
             reading[3] = np.nan
         command = controller.step(JointState(controller.dt * (k + 1), reading, qd, tau))
-        rows.append(np.concatenate([command, controller.tau_ext_hat, controller.std]))
+        rows.append(np.concatenate([command, controller.tau_ext_hat, controller.observer.std]))
     return np.array(rows)[::STRIDE]
 
 

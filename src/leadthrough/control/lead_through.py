@@ -141,20 +141,26 @@ class LeadThrough:
 
     @property
     def std(self) -> FloatArray:
-        """Standard deviation of :attr:`tau_ext_hat` [Nm]."""
-        return self.observer.std
+        """How far :attr:`tau_ext_hat` may be off, one standard deviation [Nm].
+
+        The observer's ``error_std``: the friction model's error at the latest sample
+        (large at rest, where a push below breakaway is unseen); ``observer.std`` is the
+        filter's own covariance.
+        """
+        return self.observer.error_std
 
     @property
     def tool_wrench(self) -> ToolWrench:
         """Estimated wrench on the tool at the TCP, world axes, with its covariance.
 
         ``F̂ = (Jᵀ)⁺ τ̂_ext`` with the TCP Jacobian of the latest sample and the
-        observer's std (see :mod:`leadthrough.estimation.wrench`); zero before the first.
+        estimate's :attr:`std` (see :mod:`leadthrough.estimation.wrench`); zero before the
+        first.
         """
         model = self.model
         if model is None:
             return ToolWrench(np.zeros(3), np.zeros(3), np.zeros((6, 6)))
-        return tool_wrench(model.tool_jacobian, self.observer.tau_ext_hat, self.observer.std)
+        return tool_wrench(model.tool_jacobian, self.observer.tau_ext_hat, self.std)
 
     @property
     def operator_torque(self) -> FloatArray:

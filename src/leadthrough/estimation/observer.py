@@ -200,9 +200,31 @@ class MomentumObserver:
         """Standard deviation of :attr:`tau_ext_hat` from the filter's covariance [Nm]."""
         return self._std.copy()
 
+    @property
+    def error_std(self) -> FloatArray:
+        """How far :attr:`tau_ext_hat` may be off [Nm]: what no filter separates from τ_ext.
+
+        The friction model's error at the latest sample, eq. (3) of
+        :mod:`~leadthrough.estimation.smooth_rate` without the filter's own term: the
+        Coulomb uncertainty v_C(q̇, q) (≈ τ_C at rest, where friction holds a push below
+        breakaway unseen, → 0 moving) and the level error ``relative_error · mean_f``.
+        :attr:`std` is the filter's covariance; for the time-varying and two-level
+        variants the tuning Q_τ sets it (the torque may jump 0.6 Nm within a period at
+        Q_τ = 100), so it covers the error many times over. The smooth-rate variant's
+        :attr:`std` is this plus its own P_ττ, and is returned as it is. Computed when
+        read (not in :meth:`update`); :attr:`std` before the first update.
+        """
+        if self._smooth is not None or self._sample is None:
+            return self.std
+        q, qd = self._sample
+        mean, std = self.friction.mean_and_std(qd, q)
+        coulomb_variance = np.maximum(std**2 - self.friction.noise_std**2, 0.0)
+        return np.sqrt(consider_variance(mean, coulomb_variance, self.friction.relative_error))
+
     def reset(self) -> None:
         """Forget the estimate; the next update starts from the measured momentum."""
         self._initialised = False
+        self._sample: tuple[FloatArray, FloatArray] | None = None
         self._tau[:] = 0.0
         variance = self.parameters.torque_noise  # 1 s of random walk
         self._cov_rows[:2] = 0.0
@@ -237,6 +259,7 @@ class MomentumObserver:
             The estimated external torque [Nm].
         """
         q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
+        self._sample = (q, qd)  # for error_std, computed only when read
         if model is None:
             model = self.dynamics.snapshot(q, qd)
         if self._initialised and self._levels is None and self._smooth is None and self.compiled:
