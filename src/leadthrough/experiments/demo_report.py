@@ -61,7 +61,7 @@ def _operator_torque(result: DemoResult):
             continue
         estimate, band = result.estimate[:, j], 2.0 * result.estimate_std[:, j]
         axis.fill_between(sim.t, estimate - band, estimate + band, color="tab:blue", alpha=0.15,
-                          label="±2 std (the observer's own)")  # fmt: skip
+                          label="±2 std (how far the estimate may be off)")  # fmt: skip
         axis.plot(sim.t, sim.tau_ext[:, j], "k", lw=1.5, label="true (operator + table)")
         axis.plot(sim.t, estimate, color="tab:blue", label="estimated from motor torques")
         axis.set_ylim(np.percentile(sim.tau_ext[:, j], 0.5) - 1.5,
