@@ -17,6 +17,7 @@ Usage:
     python benchmarks/guiding_quality.py [--cases quick] [--save out.json] [--compare old.json]
         [--factory module:function]   (the active controller: function(robot, mode))
         [--robot NAME] [--seeds 5-8]  (another arm; plants not developed on)
+        [--uncalibrated]              (both modes without the start-up calibration)
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ import json
 import sys
 import time
 
-from leadthrough.experiments.guiding import GOALS, cases, evaluate
+from leadthrough.experiments.guiding import GOALS, cases, evaluate, uncalibrated_factory
 from leadthrough.model import robots
 
 HEADER = (f"{'case':<30}{'effort a/p':>11}{'vib a/p':>9}{'speed p|a':>12}"
@@ -73,6 +74,11 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--cases", choices=("full", "quick"), default="full")
     parser.add_argument("--robot", default="yumi", help="a registered robot (default yumi)")
     parser.add_argument(
+        "--uncalibrated",
+        action="store_true",
+        help="both modes without the start-up calibration (the constructor's default)",
+    )
+    parser.add_argument(
         "--seeds",
         default="1-4",
         help="plant seeds of the full set, e.g. 5-8 or 5,9 (default 1-4, the development "
@@ -86,7 +92,7 @@ def main(argv: list[str] | None = None) -> None:
         "from (robot, mode); default lt.LeadThrough(robot, mode=mode, dt=0.004, calibrate=True)",
     )
     args = parser.parse_args(argv)
-    factory = None
+    factory = passive_factory = uncalibrated_factory if args.uncalibrated else None
     if args.factory:
         module, _, name = args.factory.partition(":")
         factory = getattr(importlib.import_module(module), name)
@@ -102,7 +108,8 @@ def main(argv: list[str] | None = None) -> None:
 
     reported: list[str] = []
     print(HEADER)
-    results, stats = evaluate(args.cases, factory, robots.load(args.robot), report, seeds)
+    results, stats = evaluate(args.cases, factory, robots.load(args.robot), report, seeds,
+                              passive_factory)  # fmt: skip
     old = None
     if args.compare:
         with open(args.compare) as handle:

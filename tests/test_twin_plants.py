@@ -128,3 +128,15 @@ def test_vibration_keeps_what_is_above_4_hz():
     slow = 0.1 * np.sin(2 * np.pi * 0.5 * t) * np.array([[0.0, 1.0, 0.0]])
     assert tool_vibration(fast, dt) == pytest.approx(0.01 / np.sqrt(2.0), rel=0.03)
     assert tool_vibration(slow, dt) < 0.02 * 0.1
+
+
+def test_benchmark_seeds_and_uncalibrated_factory(robot):
+    """``--seeds`` picks the plants of the full set; ``--uncalibrated`` never calibrates."""
+    from leadthrough.experiments.guiding import cases, uncalibrated_factory
+
+    held_out = cases("full", (5, 6))
+    assert len(held_out) == 28 and {c.seed for c in held_out} == {5, 6}
+    assert len(cases("full")) == 56 and {c.seed for c in cases("full")} == {1, 2, 3, 4}
+    for mode in ("passive", "active"):
+        controller = uncalibrated_factory(robot, mode)
+        assert not controller.calibrating and controller.mode == mode

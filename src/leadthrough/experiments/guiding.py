@@ -158,6 +158,11 @@ def default_factory(robot: RobotDescription, mode: str) -> LeadThrough:
     return LeadThrough(robot, mode=mode, dt=0.004, calibrate=True)  # type: ignore[arg-type]
 
 
+def uncalibrated_factory(robot: RobotDescription, mode: str) -> LeadThrough:
+    """The constructor's default: ``LeadThrough(robot, mode=mode, dt=0.004)``, no calibration."""
+    return LeadThrough(robot, mode=mode, dt=0.004)  # type: ignore[arg-type]
+
+
 class _Recorder:
     """Steps a controller and keeps its τ̂_ext and std when it has them."""
 
@@ -383,6 +388,7 @@ def evaluate(
     robot: RobotDescription | None = None,
     report: Callable[[str, dict[str, float]], None] | None = None,
     seeds: Sequence[int] = DEVELOPMENT_SEEDS,
+    passive_factory: ControllerFactory | None = None,
 ) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, float]]]:
     """Every case of ``cases(kind)``: default passive against the active controller.
 
@@ -394,6 +400,8 @@ def evaluate(
         report: Called with each case's name and figures as they come (progress).
         seeds: Plant seeds of the full set (e.g. held-out ones, :data:`DEVELOPMENT_SEEDS`
             excluded, to judge defaults on plants they were not developed on).
+        passive_factory: Builds the passive controller, ``factory(robot, "passive")``;
+            default :func:`default_factory`.
 
     Returns:
         The figures per case name (:func:`figures`) and their :func:`summary`.
@@ -404,7 +412,7 @@ def evaluate(
         robot = robots.yumi()
     results = {}
     for case in cases(kind, seeds):
-        passive = run_case(case, "passive", robot=robot)
+        passive = run_case(case, "passive", passive_factory, robot=robot)
         active = run_case(case, "active", controller_factory, robot=robot)
         results[case.name] = figures(passive, active)
         if report is not None:
