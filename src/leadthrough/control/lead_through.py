@@ -229,7 +229,9 @@ class LeadThrough:
         """Carry a known payload from now on (``robot.with_payload``): a new model everywhere.
 
         The feed-forward, the observer and the supervisor all switch to the same model;
-        the filters restart (do it while the arm rests).
+        the filters restart (do it while the arm rests). This payload replaces the one a
+        start-up calibration weighed; its :attr:`gravity_correction` (what the payload
+        did not explain) is kept.
 
         Args:
             mass: Payload mass [kg], >= 0.
