@@ -143,11 +143,20 @@ class LeadThrough:
     def std(self) -> FloatArray:
         """How far :attr:`tau_ext_hat` may be off, one standard deviation [Nm].
 
-        The observer's ``error_std``: the friction model's error at the latest sample
-        (large at rest, where a push below breakaway is unseen); ``observer.std`` is the
-        filter's own covariance.
+        The model's two errors at the latest sample, independent: the friction model's
+        (the observer's ``error_std``; large at rest, where a push below breakaway is
+        unseen) and the gravity model's, ``parameters.gravity_std · |G(q) − G_cal|``
+        (G_cal the gravity the calibration measured at its pose on the joints it
+        measured, 0 elsewhere and without one: the error the Coulomb compensation's
+        ceiling allows for). ``observer.std`` is the filter's own covariance.
         """
-        return self.observer.error_std
+        friction = self.observer.error_std
+        model = self.model
+        if model is None:
+            return friction
+        reference = 0.0 if self._gravity_reference is None else self._gravity_reference
+        gravity = self.parameters.gravity_std * np.abs(model.gravity - reference)
+        return np.sqrt(friction**2 + gravity**2)
 
     @property
     def tool_wrench(self) -> ToolWrench:
@@ -179,7 +188,8 @@ class LeadThrough:
         The gravity error it measured at its pose (after the payload), ``−bias`` there:
         feed-forward, observer and supervisor then hold the arm with the corrected model,
         and away from that pose the model may be off by ``parameters.gravity_uncertainty``
-        times the change of G (the Coulomb compensation's ceiling).
+        times the change of G (the Coulomb compensation's ceiling); on a joint stiction kept
+        the calibration from measuring, by that times all of G, as without a calibration.
         """
         correction = self._gravity_correction
         return np.zeros(self.robot.n_joints) if correction is None else correction.copy()
@@ -351,7 +361,11 @@ class LeadThrough:
         # the gravity error measured at the pose goes into the model, as the payload does:
         # feed-forward, observer and supervisor all hold the arm with G(q) − bias
         self._gravity_correction = -np.asarray(calibration.bias, dtype=float)
-        self._gravity_reference = self.dynamics.gravity(calibration.pose) - calibration.bias
+        # where the gravity is known: at the pose on the joints that slid; a joint that
+        # stiction held was not measured, so all of its G may be off (reference 0)
+        measured_gravity = self.dynamics.gravity(calibration.pose) - calibration.bias
+        measured = True if calibration.measured is None else calibration.measured
+        self._gravity_reference = np.where(measured, measured_gravity, 0.0)
         self.law.model_error.calibrate(np.zeros(self.robot.n_joints), self._gravity_reference)
 
     def _control(

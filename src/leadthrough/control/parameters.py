@@ -85,7 +85,8 @@ class LeadThroughParameters:
             gravity error the model may read without an operator
             (:attr:`gravity_uncertainty`). The Coulomb compensation stays below
             ``(1 − friction error) τ_C − gravity_uncertainty |G(q) − G_ref|`` (G_ref: G at
-            the calibration's pose, 0 without one), so that a released arm stops.
+            the calibration's pose on the joints it measured, 0 elsewhere and without one),
+            so that a released arm stops.
         friction_uncertainty: Relative error of the friction levels [–]; None takes the
             friction model's own (``FrictionModel.relative_error``). That much of the
             modelled friction is taken off the estimate along the motion, so that a model
@@ -184,6 +185,16 @@ class LeadThroughParameters:
         calibration measured the error).
         """
         return self.mass_uncertainty + self.drive_gain_uncertainty
+
+    @property
+    def gravity_std(self) -> float:
+        """Standard deviation of the same relative error [–], for error bands.
+
+        The two bounds are independent errors, each anywhere within ±its bound: the std
+        of their sum is ``√(mass² + drive_gain²) / √3`` (0.065 with the defaults, against
+        the bound 0.15 that safety margins use).
+        """
+        return float(np.hypot(self.mass_uncertainty, self.drive_gain_uncertainty) / np.sqrt(3.0))
 
     def check_robot(self, robot: RobotDescription) -> None:
         """Raise ParameterError (one line) for a setting that does not fit ``robot``.

@@ -207,7 +207,8 @@ class MomentumObserver:
         The friction model's error at the latest sample, eq. (3) of
         :mod:`~leadthrough.estimation.smooth_rate` without the filter's own term: the
         Coulomb uncertainty v_C(q̇, q) (≈ τ_C at rest, where friction holds a push below
-        breakaway unseen, → 0 moving) and the level error ``relative_error · mean_f``.
+        breakaway unseen, → 0 moving) and the level error ``level_std · mean_f`` (the
+        std of a level known to within ±``relative_error``).
         :attr:`std` is the filter's covariance; for the time-varying and two-level
         variants the tuning Q_τ sets it (the torque may jump 0.6 Nm within a period at
         Q_τ = 100), so it covers the error many times over. The smooth-rate variant's
@@ -219,7 +220,7 @@ class MomentumObserver:
         q, qd = self._sample
         mean, std = self.friction.mean_and_std(qd, q)
         coulomb_variance = np.maximum(std**2 - self.friction.noise_std**2, 0.0)
-        return np.sqrt(consider_variance(mean, coulomb_variance, self.friction.relative_error))
+        return np.sqrt(consider_variance(mean, coulomb_variance, self.friction.level_std))
 
     def reset(self) -> None:
         """Forget the estimate; the next update starts from the measured momentum."""

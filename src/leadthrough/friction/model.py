@@ -129,6 +129,18 @@ class FrictionModel:
         return self.has_position_dependence
 
     @property
+    def level_std(self) -> FloatArray:
+        """Standard deviation of the Coulomb levels' relative error [–], (n,).
+
+        ``relative_error`` bounds the error: the true level lies anywhere within ±that
+        fraction of this model's. A level spread evenly over ±a has the std a / √3, which
+        is what a ±2 std band must cover (with ``relative_error`` as the std it covered
+        99.7 % of the moving samples of ``benchmarks/guiding_quality.py``: honest, but
+        wider than an error band should be).
+        """
+        return self.relative_error / np.sqrt(3.0)
+
+    @property
     def n_joints(self) -> int:
         """Number of joints n."""
         return self.coulomb.shape[0]
