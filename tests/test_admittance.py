@@ -6,8 +6,10 @@ import pytest
 from leadthrough.control.admittance import (
     AdmittanceState,
     admittance_step,
+    damping_weight,
     dead_zone,
     keep_within,
+    motion_sign,
     operator_weight,
     virtual_damping,
 )
@@ -80,3 +82,33 @@ def test_virtual_damping_rises_smoothly_where_nobody_pushes():
     np.testing.assert_allclose(damping, [2.0 / 0.25, 6.0 * 0.5 / 0.25, 6.0 / 3.5 / 0.25])
     weights = np.linspace(0.0, 1.0, 101)
     assert np.all(np.diff(virtual_damping(np.ones(101), 0.25, 5.0, weights)) < 0.0)
+
+
+def test_damping_weight_counts_the_push_that_starts_or_sustains_a_motion():
+    """At rest the whole residual counts; moving, only its average along the motion.
+
+    A residual against the motion (the operator braking, or friction the model
+    overstates, read as drag once nobody holds the arm) weighs nothing, so the damping
+    rises and the joint stops; one along it weighs as the operator weight does.
+    """
+    sigma, knee = np.full(3, 0.2), 0.5
+    residual = np.array([0.5, 0.5, -0.5])
+    moving = motion_sign(np.array([0.0, 0.3, 0.3]), 0.01)  # at rest, moving, moving
+    sustained = residual * moving  # held that long: the average is the residual along it
+    weight = damping_weight(residual, sustained, moving, sigma, knee)
+    operator = operator_weight(residual, sigma, knee)
+    np.testing.assert_allclose(weight[:2], operator[:2], rtol=1e-3)
+    assert operator[2] > 0.9 and weight[2] < 0.01
+
+
+def test_damping_weight_has_no_step_as_a_joint_starts_or_the_push_turns():
+    """Continuous in the reference velocity and in the averaged push: nothing switches."""
+    sigma, knee = np.full(2001, 0.2), 0.5
+    speed = np.linspace(-0.1, 0.1, 2001)
+    residual = np.full(2001, 0.4)
+    moving = motion_sign(speed, 0.01)
+    weight = damping_weight(residual, residual * moving, moving, sigma, knee)
+    assert np.max(np.abs(np.diff(weight))) < 0.01
+    sustained = np.linspace(-1.0, 1.0, 2001)
+    weight = damping_weight(residual, sustained, np.ones(2001) * 0.999, sigma, knee)
+    assert np.all(np.diff(weight) >= 0.0) and np.max(np.diff(weight)) < 0.01

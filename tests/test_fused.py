@@ -22,7 +22,8 @@ PERIODS = 20000
 def _state(law: ActiveLaw) -> np.ndarray:
     """Everything the active law keeps or produces, in one row."""
     references, bias = law.references, law.model_error
-    return np.concatenate([law.drive, law.weight, law.feedback,
+    return np.concatenate([law.drive, law.weight, law.feedback, law.sustained,
+                           law.damping_weight,
                            bias.bias, bias.gravity_learned, [bias.confidence],
                            references.q_ref, references.qd_ref])  # fmt: skip
 
@@ -80,7 +81,13 @@ def _law_run(robot: lt.RobotDescription, parameters: LeadThroughParameters, fric
     ],
 )
 def test_compiled_law_equals_the_numpy_reference_over_random_periods(robot_name, changes, cable):
-    """20 000 periods of drive, bias, weights, references and PD torque: equal to 1e-12."""
+    """20 000 periods of drive, bias, weights, references and PD torque: equal to 1e-9.
+
+    The friction terms (a tanh) differ by one ulp between NumPy and the compiled code;
+    the damping weight averages the push over ``push_time`` and feeds the references,
+    which feed the next residual, so over 20 000 random periods that grows to ~1e-11
+    relative. A kernel that computes anything else is off by far more (1e-6 and up).
+    """
     robot = getattr(lt.robots, robot_name)()
     friction = _cable(robot) if cable else lt.FrictionModel.from_robot(robot)
     parameters = LeadThroughParameters(**changes)
@@ -89,7 +96,7 @@ def test_compiled_law_equals_the_numpy_reference_over_random_periods(robot_name,
     assert np.all(np.isfinite(reference))
     weights = reference[:, robot.n_joints : 2 * robot.n_joints]
     assert 0.05 < np.mean(weights > 0.5) < 0.95 or parameters.assist_knee == 0.0  # both sides
-    np.testing.assert_allclose(compiled, reference, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(compiled, reference, rtol=1e-9, atol=1e-9)
 
 
 def test_a_nan_estimate_propagates_as_in_numpy():

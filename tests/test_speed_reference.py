@@ -4,10 +4,11 @@
 seeded sequences (passive and active, with and without a measured torque, calibration,
 virtual constraints, a sensor fault, the two-level observer, the Panda) and of seeded twin
 runs (a hand on the tool, the table, lead-through in the loop), computed at commit
-2b53732, before the speed work, and regenerated once since, for a deliberate change of
-behaviour: the start-up calibration's gravity error put into the model and the Coulomb
-compensation's ceiling (a released arm stops in either mode). A faster step must
-reproduce them.
+2b53732, before the speed work, and regenerated since for deliberate changes of
+behaviour only: the start-up calibration's gravity error put into the model and the
+Coulomb compensation's ceiling (a released arm stops in either mode), then the virtual
+damping weighed on the push that sustains a motion (``admittance.damping_weight``). A
+faster step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

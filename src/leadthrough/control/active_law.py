@@ -8,10 +8,11 @@ Per period, after the observer (thesis §6.2, SPEC §6):
    weighed smoothly by how far it stands out of the model's own uncertainty (friction
    error and noise, gravity error; :func:`~leadthrough.control.admittance.operator_weight`).
 2. :meth:`ActiveLaw.tracking`: the admittance model (virtual inertia k_M M(q) heavier than
-   the arm, damping that rises once nobody pushes) turns that torque plus the virtual
-   constraints' into references that stay clear of the joint limits, tracked by a PD whose
-   gains follow M(q) (thesis eqs. 6.4–6.6); near an end-stop a push *away* from it is taken
-   for the stop's reaction, not the operator's (the failure of thesis §6.3.2).
+   the arm, damping that rises once no push starts or sustains a joint's motion) turns
+   that torque plus the virtual constraints' into references that stay clear of the
+   joint limits, tracked by a PD whose gains follow M(q) (thesis eqs. 6.4–6.6); near an
+   end-stop a push *away* from it is taken for the stop's reaction, not the operator's
+   (the failure of thesis §6.3.2).
 
 Both run compiled (:mod:`leadthrough.control.fused`) unless :attr:`ActiveLaw.compiled` is
 False: the readable NumPy methods below are the reference the tests hold them to. The
@@ -21,21 +22,26 @@ passive mode runs step 1 too (the operator torque is a readout there).
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 
 from leadthrough.control.admittance import (
     AdmittanceState,
     admittance_step,
+    damping_weight,
     dead_zone,
     keep_within,
+    motion_sign,
     operator_weight,
     tracking_torque,
     virtual_damping,
 )
 from leadthrough.control.bias import ModelErrorBias
-from leadthrough.control.fused import admittance_law, operator_drive
+from leadthrough.control.fused import admittance_law, operator_drive, sliding_velocity
 from leadthrough.control.parameters import LeadThroughParameters
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
+
+BoolArray = NDArray[np.bool_]
 
 
 class ActiveLaw:
@@ -54,6 +60,13 @@ class ActiveLaw:
         model_error: The bias learned while nobody guides (and by the calibration).
         drive: Operator torque that drives the admittance [Nm].
         weight: Operator weight of every joint [–].
+        residual: The operator torque before its weight [Nm].
+        uncertainty: What the model may read without an operator, per joint [Nm]: the
+            scale of :attr:`weight` and :attr:`damping_weight`.
+        sustained: The push (residual plus constraints' torque) along each joint's
+            motion, averaged over ``push_time`` [Nm].
+        damping_weight: Weight of the push that starts or sustains each joint's motion
+            [–] (:func:`~leadthrough.control.admittance.damping_weight`): sets D̃.
         feedback: The last tracking torque [Nm].
         references: The admittance's references (None until the first active period).
     """
@@ -76,11 +89,13 @@ class ActiveLaw:
         self._reference_high = robot.q_max - parameters.limit_zone
         self._speed_cap = parameters.assist_speed_fraction * robot.velocity_limits
         p = parameters  # the scalars of the compiled law (fused.DRIVE/ADMITTANCE_SCALARS)
+        self._push_average = dt / (p.push_time + dt)  # the average over push_time
         self._drive_scalars = np.array([p.gravity_uncertainty, dt, p.bias_time,
                                         p.drive_gain_uncertainty, p.assist_knee])  # fmt: skip
         self._admittance_scalars = np.array([float(p.limit_aware), p.reanchor_error,
             p.damping_time, p.rest_damping, p.inertia_scale, dt,
-            (2.0 * np.pi * p.position_bandwidth) ** 2, p.velocity_time])  # fmt: skip
+            (2.0 * np.pi * p.position_bandwidth) ** 2, p.velocity_time, p.assist_knee,
+            p.rest_velocity, self._push_average])  # fmt: skip
         self._terms = np.zeros((4, self.n))  # the friction terms of a period (terms_into)
         self._term_rows = tuple(self._terms)  # its rows (views), for the compiled drive
         self.use_friction(nominal_friction)
@@ -108,13 +123,31 @@ class ActiveLaw:
         self.model_error = ModelErrorBias(n, p.bias_time, p.gravity_uncertainty)
         self.drive = np.zeros(n)
         self.weight = np.zeros(n)
+        self.residual = np.zeros(n)
+        self.uncertainty = np.zeros(n)
+        self.sustained = np.zeros(n)
+        self.damping_weight = np.zeros(n)
         self.feedback = np.zeros(n)
         self.references: AdmittanceState | None = None
         self._work = np.zeros((n, n + 1))  # the compiled admittance's scratch space
+        self._sliding = np.zeros(n)  # the compiled sliding velocity
 
     def friction_terms(self, q: FloatArray, qd: FloatArray) -> FloatArray:
         """The friction model's terms at (q̇, q) for this period (``terms_into``), (4, n)."""
         return self.friction.terms_into(qd, q, self._terms)
+
+    def sliding_velocity(self, qd: FloatArray) -> FloatArray:
+        """``sign(q̇) · max(|q̇| − v_rest, 0)`` [rad/s]: the speed the law's friction sees.
+
+        A joint slower than ``rest_velocity`` is at rest (the project's one definition):
+        no friction margin, the whole stiction band as uncertainty. Without it the dither's
+        twitch of a resting joint (±0.4 mrad/s at 15 Hz) swung the margin and the
+        uncertainty with its phase, and the weight passed the drag of one phase more than
+        the other: a rectified drive that crept a released joint 1.2 mrad in 4 s.
+        """
+        if self.compiled:
+            return sliding_velocity(qd, self.parameters.rest_velocity, self._sliding)
+        return dead_zone(qd, self.parameters.rest_velocity)
 
     def operator_torque(
         self,
@@ -131,8 +164,10 @@ class ActiveLaw:
             q: Joint positions [rad].
             qd: Joint velocities [rad/s].
             gravity: G(q) [Nm].
-            terms: :meth:`friction_terms` of this period, if computed already.
+            terms: :meth:`friction_terms` at (:meth:`sliding_velocity`, q), if computed
+                already.
         """
+        qd = self.sliding_velocity(qd)
         if not self.compiled:
             self._update_drive(estimate, q, qd, gravity)
             return self.drive
@@ -142,7 +177,8 @@ class ActiveLaw:
         bias, (level, viscous, upper, lower) = self.model_error, rows
         bias.confidence = operator_drive(estimate, q, gravity, level, viscous, upper, lower,
             self._joint_constants, self._drive_scalars, bias.bias, bias.gravity_learned,
-            bias.confidence, self.weight, self.drive, self.feedback)  # fmt: skip
+            bias.confidence, self.weight, self.drive, self.feedback, self.residual,
+            self.uncertainty)  # fmt: skip
         return self.drive
 
     def tracking(
@@ -157,13 +193,15 @@ class ActiveLaw:
             mass: M(q) [kg m²].
         """
         if not self.compiled:
-            return self._admittance(q, qd, self.drive + constraint, mass)
+            return self._admittance(q, qd, self.drive + constraint, mass,
+                                    self.residual + constraint)  # fmt: skip
         if self.references is None:
             self.references = AdmittanceState(q.copy(), qd.copy())
         references = self.references
-        admittance_law(q, qd, self.drive, constraint, mass, self.weight, self._joint_constants,
-                       self._admittance_scalars, references.q_ref, references.qd_ref,
-                       self.feedback, self._work)  # fmt: skip
+        admittance_law(q, qd, self.drive, constraint, mass, self.residual, self.uncertainty,
+                       self._joint_constants, self._admittance_scalars, references.q_ref,
+                       references.qd_ref, self.sustained, self.damping_weight, self.feedback,
+                       self._work)  # fmt: skip
         return self.feedback
 
     def _update_drive(
@@ -187,6 +225,7 @@ class ActiveLaw:
                        + self.friction.coulomb_uncertainty(qd, q))  # fmt: skip
         self.weight = operator_weight(residual, uncertainty, p.assist_knee)
         self.drive = residual * self.weight
+        self.residual, self.uncertainty = residual, uncertainty
 
     def _friction_margin(self, q: FloatArray, qd: FloatArray) -> FloatArray:
         """The friction the model may overstate, along the motion [Nm].
@@ -201,23 +240,27 @@ class ActiveLaw:
         return self.friction_error * coulomb + self._viscous_relative * viscous
 
     def _admittance(
-        self, q: FloatArray, qd: FloatArray, drive: FloatArray, mass: FloatArray
-    ) -> FloatArray:
+        self, q: FloatArray, qd: FloatArray, drive: FloatArray, mass: FloatArray,
+        push: FloatArray,
+    ) -> FloatArray:  # fmt: skip
         """References from the admittance model, and the PD torque that tracks them.
 
-        Virtual inertia k_M M(q) and damping :func:`virtual_damping`; the PD gains follow
-        the joint inertias m_ii(q). A joint whose tracking is lost (an end-stop, a
+        Virtual inertia k_M M(q) and damping :func:`virtual_damping` (``drive`` the
+        admittance's input, ``push`` the same before the operator weight); the PD gains
+        follow the joint inertias m_ii(q). A joint whose tracking is lost (an end-stop, a
         collision) has its references re-anchored to the measured state: nothing winds up.
         """
         p = self.parameters
         if p.limit_aware:
-            drive = self._ignore_end_stop_reaction(q, drive)
+            reaction = self._end_stop_reaction(q, drive)
+            drive, push = np.where(reaction, 0.0, drive), np.where(reaction, 0.0, push)
         inertia = np.diag(mass)
         references = self.references or AdmittanceState(q.copy(), qd.copy())
         lost = np.abs(references.q_ref - q) > p.reanchor_error
         references = AdmittanceState(np.where(lost, q, references.q_ref),
                                      np.where(lost, qd, references.qd_ref))  # fmt: skip
-        damping = virtual_damping(inertia, p.damping_time, p.rest_damping, self.weight)
+        self.damping_weight = self._damping_weight(push, references.qd_ref)
+        damping = virtual_damping(inertia, p.damping_time, p.rest_damping, self.damping_weight)
         references = admittance_step(references, drive, mass, p.inertia_scale, damping, self.dt)
         references.qd_ref = np.clip(references.qd_ref, -self._speed_cap, self._speed_cap)
         if p.limit_aware:
@@ -230,9 +273,20 @@ class ActiveLaw:
         self.feedback = tracking_torque(references, q, qd, kp, inertia / p.velocity_time)
         return self.feedback
 
-    def _ignore_end_stop_reaction(self, q: FloatArray, drive: FloatArray) -> FloatArray:
-        """Near a limit, a torque pushing away from it is the end-stop's reaction."""
+    def _damping_weight(self, push: FloatArray, qd_ref: FloatArray) -> FloatArray:
+        """Weight of the push that starts or sustains each motion; updates the average.
+
+        The whole push at rest, its average along the motion while a joint moves: the
+        drag the law reads once nobody holds the arm raises D̃
+        (:func:`~leadthrough.control.admittance.damping_weight`).
+        """
+        p = self.parameters
+        moving = motion_sign(qd_ref, p.rest_velocity)
+        self.sustained = self.sustained + self._push_average * (push * moving - self.sustained)
+        return damping_weight(push, self.sustained, moving, self.uncertainty, p.assist_knee)
+
+    def _end_stop_reaction(self, q: FloatArray, drive: FloatArray) -> BoolArray:
+        """Where a torque near a limit pushes away from it: the end-stop's reaction."""
         near_high = q > self._reference_high
         near_low = q < self._reference_low
-        reaction = (near_high & (drive < 0)) | (near_low & (drive > 0))
-        return np.where(reaction, 0.0, drive)
+        return (near_high & (drive < 0)) | (near_low & (drive > 0))

@@ -14,7 +14,8 @@ a collision).
 
 Which part of the estimate is the operator's is weighed smoothly by how far it stands
 out of the model's own uncertainty (:func:`operator_weight`), and the virtual damping
-rises smoothly once nobody pushes (:func:`virtual_damping`). The virtual inertia is
+rises smoothly once nobody pushes a joint on (:func:`damping_weight`,
+:func:`virtual_damping`). The virtual inertia is
 *heavier* than the arm (k_M > 1): the estimate lags the operator's torque (the
 observer's bandwidth, the command delay), and an admittance lighter than the arm it
 moves turns that lag into a negative damping that a stiff hand makes unstable
@@ -109,24 +110,64 @@ def operator_weight(residual: FloatArray, uncertainty: FloatArray, knee: float) 
     return z2 / (1.0 + z2)
 
 
+def motion_sign(qd_ref: FloatArray, rest_velocity: float) -> FloatArray:
+    """Smooth sign of each joint's motion, in (−1, 1) [–]: ``q̇ / √(q̇² + v_rest²)``.
+
+    ±1 for a joint that clearly moves, 0 at rest, with no step in between.
+    """
+    return qd_ref / np.sqrt(qd_ref**2 + rest_velocity**2)
+
+
+def damping_weight(
+    residual: FloatArray,
+    sustained: FloatArray,
+    moving: FloatArray,
+    uncertainty: FloatArray,
+    knee: float,
+) -> FloatArray:
+    """Weight that sets the virtual damping: of the input that starts or sustains a motion.
+
+    The admittance's input (the weighted operator torque plus the virtual constraints')
+    counts whole when it starts a joint from rest; on a moving joint only its part
+    *along* the motion, averaged over ``push_time`` (``sustained``, the low-passed
+    ``τ_in · s``), counts. An input against the motion is the operator braking, or the
+    friction the model may overstate, which the law reads as drag by design once nobody
+    holds the arm: either way nothing sustains the motion, so the damping rises and the
+    joint stops instead of coasting on its virtual inertia. The average keeps a stiff
+    hand's oscillation, whose sign alternates within 0.1–0.2 s, from modulating the
+    damping. ``push = √((τ_in (1 − |s|))² + max(sustained, 0)²)``, weighed as
+    :func:`operator_weight` weighs the residual.
+
+    Args:
+        residual: The admittance's input τ_in [Nm].
+        sustained: τ_in along the motion, averaged over ``push_time`` [Nm].
+        moving: :func:`motion_sign` of the reference velocity [–].
+        uncertainty: As for :func:`operator_weight` [Nm].
+        knee: As for :func:`operator_weight` [–].
+    """
+    idle, along = residual * (1.0 - np.abs(moving)), np.maximum(sustained, 0.0)
+    push = np.sqrt(idle * idle + along * along)
+    return operator_weight(push, uncertainty, knee)
+
+
 def virtual_damping(
     inertia: FloatArray, damping_time: float, rest_scale: float, weight: FloatArray
 ) -> FloatArray:
     """Diagonal of D̃ [Nm s/rad]: ``m_ii / damping_time`` while guiding, heavier without.
 
-    ``D̃_ii = m_ii / damping_time · (1 + B) / (1 + B w_i)`` with ``w_i`` the joint's operator
-    weight and ``B = rest_scale``: a joint's damping rises smoothly to ``1 + B`` times its
-    guiding value as its weight falls to 0 (the operator lets go, or does not push that
-    joint). A released joint then stops within about ``k_M · damping_time / (1 + B)``, and
-    a model error ``e`` that leaks through the weight moves it at
-    ``e w (1 + B w) / ((1 + B) D̃_guide)``, quadratically slower as the weight fades,
-    instead of coasting at ``e / D̃``.
+    ``D̃_ii = m_ii / damping_time · (1 + B) / (1 + B w_i)`` with ``w_i`` the joint's
+    :func:`damping_weight` and ``B = rest_scale``: a joint's damping rises smoothly to
+    ``1 + B`` times its guiding value as its weight falls to 0 (the operator lets go,
+    does not push that joint, or holds it back). A released joint then stops within
+    about ``k_M · damping_time / (1 + B)``, and a model error ``e`` that leaks through
+    the weight moves it at ``e w (1 + B w) / ((1 + B) D̃_guide)``, quadratically slower
+    as the weight fades, instead of coasting at ``e / D̃``.
 
     Args:
         inertia: Diagonal of M(q) [kg m²].
         damping_time: Time constant m_ii / D̃_ii while guiding [s].
         rest_scale: Extra damping, in multiples, once nobody pushes [–].
-        weight: :func:`operator_weight` of every joint.
+        weight: :func:`damping_weight` of every joint.
     """
     return inertia / damping_time * (1.0 + rest_scale) / (1.0 + rest_scale * weight)
 

@@ -9,9 +9,11 @@ these to at 1e-12):
   remove the friction the model may overstate, weigh the residual by the model's own
   uncertainty (:func:`~leadthrough.control.admittance.operator_weight`);
 * :func:`admittance_law` is ``ActiveLaw._admittance``: ignore an end-stop's reaction,
-  re-anchor lost references, integrate the admittance (:func:`~leadthrough.control.
-  admittance.admittance_step`, the (k_M M + dt D̃) system solved by Gaussian elimination
-  with partial pivoting), cap and bound the references, and the PD that tracks them.
+  re-anchor lost references, weigh the push that starts or sustains each motion
+  (:func:`~leadthrough.control.admittance.damping_weight`), integrate the admittance
+  (:func:`~leadthrough.control.admittance.admittance_step`, the (k_M M + dt D̃) system
+  solved by Gaussian elimination with partial pivoting), cap and bound the references,
+  and the PD that tracks them.
 
 Both work in place on the law's state (arrays preallocated once) and take its
 constants packed in one (7, n) array of per-joint rows and one array of scalars (see
@@ -36,12 +38,14 @@ DRIVE_SCALARS = ("gravity_uncertainty", "dt", "bias_time", "drive_gain_uncertain
 #: Scalars of :func:`admittance_law`, in order (``limit_aware`` as 0/1, ``position_gain``
 #: is (2π f)² [1/s²]).
 ADMITTANCE_SCALARS = ("limit_aware", "reanchor_error", "damping_time", "rest_damping",
-                      "inertia_scale", "dt", "position_gain", "velocity_time")  # fmt: skip
+                      "inertia_scale", "dt", "position_gain", "velocity_time", "assist_knee",
+                      "rest_velocity", "push_average")  # fmt: skip
 
 
 @kernel
 def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, scalars,
-                   bias, gravity_learned, confidence, weight, drive, feedback):  # fmt: skip
+                   bias, gravity_learned, confidence, weight, drive, feedback, residuals,
+                   uncertainty):  # fmt: skip
     """One period of the operator torque, in place; returns the bias' new confidence.
 
     Args:
@@ -61,6 +65,8 @@ def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, sc
         weight: Operator weights [–], updated.
         drive: Operator drive [Nm], written.
         feedback: The admittance's last tracking torque [Nm].
+        residuals: The residual before its weight [Nm], written.
+        uncertainty: What the model may read without an operator [Nm], written.
     """
     gravity_uncertainty, dt, bias_time, gain_uncertainty, knee = scalars
     n = q.shape[0]
@@ -98,11 +104,12 @@ def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, sc
         unknown = abs(gravity[i])
         changed = abs(gravity[i] - gravity_learned[i])
         tolerance = gravity_uncertainty * ((1.0 - confidence) * unknown + confidence * changed)
-        uncertainty = (joint[5, i] + tolerance) + half_level * (upper[i] - lower[i])
+        spread = (joint[5, i] + tolerance) + half_level * (upper[i] - lower[i])
+        residuals[i], uncertainty[i] = residual, spread
         if knee == 0.0:
             w = 1.0
         else:
-            floor = uncertainty if uncertainty > 1e-12 or uncertainty != uncertainty else 1e-12
+            floor = spread if spread > 1e-12 or spread != spread else 1e-12
             z = residual / (knee * floor)
             z2 = z * z
             w = z2 / (1.0 + z2)
@@ -112,8 +119,22 @@ def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, sc
 
 
 @kernel
-def admittance_law(q, qd, drive, constraint, mass, weight, joint, scalars, q_ref, qd_ref,
-                   feedback, work):  # fmt: skip
+def sliding_velocity(qd, rest_velocity, out):
+    """``sign(q̇) · max(|q̇| − v_rest, 0)`` [rad/s] into ``out`` (``ActiveLaw.sliding_velocity``)."""
+    for i in range(qd.shape[0]):
+        v = qd[i]
+        if v > rest_velocity:
+            out[i] = v - rest_velocity
+        elif v < -rest_velocity:
+            out[i] = v + rest_velocity
+        else:
+            out[i] = 0.0  # at rest (and NaN, as the NumPy dead_zone)
+    return out
+
+
+@kernel
+def admittance_law(q, qd, drive, constraint, mass, residuals, uncertainty, joint, scalars, q_ref,
+                   qd_ref, sustained, damping_weight, feedback, work):  # fmt: skip
     """One period of the admittance and its tracking PD, in place (``feedback`` [Nm]).
 
     Args:
@@ -122,24 +143,43 @@ def admittance_law(q, qd, drive, constraint, mass, weight, joint, scalars, q_ref
         drive: Operator drive [Nm].
         constraint: Virtual constraints' torque [Nm].
         mass: M(q) [kg m²], (n, n).
-        weight: Operator weights [–].
+        residuals: The operator's residual before its weight [Nm].
+        uncertainty: What the model may read without an operator [Nm].
         joint: Per-joint constants, rows :data:`JOINT_ROWS`.
         scalars: :data:`ADMITTANCE_SCALARS`.
         q_ref: Position reference [rad], updated.
         qd_ref: Velocity reference [rad/s], updated.
+        sustained: The input along the motion, averaged over ``push_time`` [Nm], updated.
+        damping_weight: Weight that sets the virtual damping [–], written.
         feedback: Tracking torque [Nm], written.
         work: Scratch space, (n, n + 1).
     """
-    limit_aware, reanchor, damping_time, rest, scale, dt, position_gain, velocity_time = scalars
+    (limit_aware, reanchor, damping_time, rest, scale, dt, position_gain, velocity_time, knee,
+     rest_velocity, average) = scalars  # fmt: skip
     n = q.shape[0]
     for i in range(n):  # the reference system (k_M M + dt D̃) x = k_M M q̇_ref + dt τ_in
         tau_in = drive[i] + constraint[i]
+        push_in = residuals[i] + constraint[i]
         reaction = (q[i] > joint[2, i] and tau_in < 0) or (q[i] < joint[1, i] and tau_in > 0)
         if limit_aware != 0.0 and reaction:  # near a limit, a push away is the stop's reaction
-            tau_in = 0.0
+            tau_in = push_in = 0.0
         if abs(q_ref[i] - q[i]) > reanchor:  # tracking lost: re-anchor
             q_ref[i], qd_ref[i] = q[i], qd[i]
         work[i, n] = dt * tau_in
+        v = qd_ref[i]  # what starts or sustains the motion: at rest all of it, moving along
+        moving = v / math.sqrt(v * v + rest_velocity * rest_velocity)
+        sustained[i] = sustained[i] + average * (push_in * moving - sustained[i])
+        along = sustained[i] if sustained[i] > 0.0 or sustained[i] != sustained[i] else 0.0
+        idle = push_in * (1.0 - abs(moving))
+        push = math.sqrt(idle * idle + along * along)
+        if knee == 0.0:
+            damping_weight[i] = 1.0
+        else:
+            u = uncertainty[i]
+            floor = u if u > 1e-12 or u != u else 1e-12
+            z = push / (knee * floor)
+            z2 = z * z
+            damping_weight[i] = z2 / (1.0 + z2)
     for i in range(n):
         total = 0.0
         for j in range(n):
@@ -147,7 +187,7 @@ def admittance_law(q, qd, drive, constraint, mass, weight, joint, scalars, q_ref
             work[i, j] = virtual
             total += virtual * qd_ref[j]
         work[i, n] += total
-        damping = mass[i, i] / damping_time * (1.0 + rest) / (1.0 + rest * weight[i])
+        damping = mass[i, i] / damping_time * (1.0 + rest) / (1.0 + rest * damping_weight[i])
         work[i, i] += dt * damping
     # Gaussian elimination with partial pivoting of the augmented (n, n + 1) system
     for k in range(n):

@@ -378,10 +378,9 @@ class LeadThrough:
         self.last_feed_forward = feed_forward
         applied, dither = self._measured(tau_measured)
         self._stage = "observer"
-        terms = self.law.friction_terms(q, qd)  # once for the period
-        estimate = self.observer.update(q, qd, applied - dither, model, terms)
+        estimate = self.observer.update(q, qd, applied - dither, model)
         self._stage = "operator torque"
-        self.law.operator_torque(estimate, q, qd, model.gravity, terms)
+        self.law.operator_torque(estimate, q, qd, model.gravity)
         torque = feed_forward.total
         self._stage = "constraints"
         constraint = self._no_constraint

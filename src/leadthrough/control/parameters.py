@@ -63,9 +63,17 @@ class LeadThroughParameters:
             operator little at teaching speeds; damping is what they feel.
         damping_time: D̃_ii = m_ii(q) / damping_time while guiding [s]: the force the operator
             needs for a given speed; smaller is heavier.
-        rest_damping: Once nobody pushes (every operator weight → 0) D̃ rises smoothly to
-            (1 + rest_damping) times its guiding value [–]: the released arm stops instead of
-            coasting, and model error read at rest moves it that much slower.
+        rest_damping: Once nobody pushes a joint on (its damping weight → 0) its D̃ rises
+            smoothly to (1 + rest_damping) times its guiding value [–]: the released arm
+            stops instead of coasting, and model error read at rest moves it that much slower.
+        push_time: Time over which a push along a joint's motion is averaged to decide
+            whether it sustains the motion [s]
+            (:func:`~leadthrough.control.admittance.damping_weight`): a residual *against*
+            the motion for longer (the operator braking, or the friction the model may
+            overstate, which the law reads as drag once the hand lets go) raises the
+            damping, so the arm stops instead of coasting on its virtual inertia. Shorter
+            than a release's stop, longer than a stiff hand's oscillation (0.2 s at 5 Hz),
+            whose alternating sign must not modulate the damping.
         assist_knee: Residual torque, in multiples of the model's uncertainty, of which half
             passes to the admittance [–] (:func:`~leadthrough.control.admittance.operator_weight`);
             0 passes everything (the thesis).
@@ -121,6 +129,7 @@ class LeadThroughParameters:
     safety: SafetyParameters = field(default_factory=SafetyParameters)
     inertia_scale: float = 2.0
     damping_time: float = 0.5
+    push_time: float = 0.1
     rest_damping: float = 20.0
     assist_knee: float = 0.5
     drive_gain_uncertainty: float = 0.1
@@ -140,7 +149,7 @@ class LeadThroughParameters:
     def __post_init__(self) -> None:
         if self.mode not in ("passive", "active"):
             raise ParameterError("mode", f"'passive' or 'active', got {self.mode!r}")
-        positive = ("inertia_scale", "damping_time", "velocity_time", "bias_time",
+        positive = ("inertia_scale", "damping_time", "push_time", "velocity_time", "bias_time",
                     "reanchor_error", "limit_zone", "assist_speed_fraction")  # fmt: skip
         for name in positive:
             real(name, getattr(self, name), minimum=0.0, strict=True, error=ParameterError)
