@@ -150,31 +150,25 @@ class ActiveLaw:
         return dead_zone(qd, self.parameters.rest_velocity)
 
     def operator_torque(
-        self,
-        estimate: FloatArray,
-        q: FloatArray,
-        qd: FloatArray,
-        gravity: FloatArray,
-        terms: FloatArray | None = None,
+        self, estimate: FloatArray, q: FloatArray, qd: FloatArray, gravity: FloatArray
     ) -> FloatArray:
         """Update :attr:`drive` and :attr:`weight` from the observer's estimate [Nm].
+
+        The friction margin and uncertainty are the model's at the
+        :meth:`sliding_velocity`, not at the measured one.
 
         Args:
             estimate: τ̂_ext [Nm].
             q: Joint positions [rad].
             qd: Joint velocities [rad/s].
             gravity: G(q) [Nm].
-            terms: :meth:`friction_terms` at (:meth:`sliding_velocity`, q), if computed
-                already.
         """
         qd = self.sliding_velocity(qd)
         if not self.compiled:
             self._update_drive(estimate, q, qd, gravity)
             return self.drive
-        if terms is None:
-            terms = self.friction_terms(q, qd)
-        rows = self._term_rows if terms is self._terms else tuple(terms)
-        bias, (level, viscous, upper, lower) = self.model_error, rows
+        self.friction_terms(q, qd)  # into the rows the compiled drive reads
+        bias, (level, viscous, upper, lower) = self.model_error, self._term_rows
         bias.confidence = operator_drive(estimate, q, gravity, level, viscous, upper, lower,
             self._joint_constants, self._drive_scalars, bias.bias, bias.gravity_learned,
             bias.confidence, self.weight, self.drive, self.feedback, self.residual,

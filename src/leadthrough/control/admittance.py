@@ -125,22 +125,22 @@ def damping_weight(
     uncertainty: FloatArray,
     knee: float,
 ) -> FloatArray:
-    """Weight that sets the virtual damping: of the input that starts or sustains a motion.
+    """Weight that sets the virtual damping: of the push that starts or sustains a motion.
 
-    The admittance's input (the weighted operator torque plus the virtual constraints')
-    counts whole when it starts a joint from rest; on a moving joint only its part
-    *along* the motion, averaged over ``push_time`` (``sustained``, the low-passed
-    ``τ_in · s``), counts. An input against the motion is the operator braking, or the
+    The push (the operator's residual before its weight, plus the virtual constraints'
+    torque) counts whole when it starts a joint from rest; on a moving joint only its
+    part *along* the motion, averaged over ``push_time`` (``sustained``, the low-passed
+    ``push · s``), counts. A push against the motion is the operator braking, or the
     friction the model may overstate, which the law reads as drag by design once nobody
     holds the arm: either way nothing sustains the motion, so the damping rises and the
     joint stops instead of coasting on its virtual inertia. The average keeps a stiff
     hand's oscillation, whose sign alternates within 0.1–0.2 s, from modulating the
-    damping. ``push = √((τ_in (1 − |s|))² + max(sustained, 0)²)``, weighed as
+    damping. ``√((push (1 − |s|))² + max(sustained, 0)²)`` is weighed as
     :func:`operator_weight` weighs the residual.
 
     Args:
-        residual: The admittance's input τ_in [Nm].
-        sustained: τ_in along the motion, averaged over ``push_time`` [Nm].
+        residual: The push: residual plus the constraints' torque [Nm].
+        sustained: The push along the motion, averaged over ``push_time`` [Nm].
         moving: :func:`motion_sign` of the reference velocity [–].
         uncertainty: As for :func:`operator_weight` [Nm].
         knee: As for :func:`operator_weight` [–].
