@@ -78,7 +78,7 @@ def _run(robot: lt.RobotDescription, compiled: bool, seed: int) -> tuple[list, l
         last_good = supervisor._q_last_good
         states.append((supervisor.state, supervisor.fault_reason,
                        None if last_good is None else last_good.tolist(),
-                       sorted(supervisor._active)))  # fmt: skip
+                       supervisor._log_book.episodes))  # fmt: skip
         if supervisor.state is SupervisorState.FAULT and rng.random() < 0.05:
             supervisor.reset()
             supervisor.teach()

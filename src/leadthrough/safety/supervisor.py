@@ -21,13 +21,12 @@ fault, a wall, a joint or the tool too fast). The readable NumPy code of the com
 (``compiled = False``) is the reference the tests hold the compiled one to.
 
 The settings and bounds are in :mod:`.limits`, the sample checks in :mod:`.checks`, the
-braking torques, walls and safe-stop hold in :mod:`.braking`; this module holds the state
-machine and its events.
+braking torques, walls and safe-stop hold in :mod:`.braking`, the log (one event per
+episode) in :mod:`.events`; this module holds the state machine.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from enum import StrEnum
 
 import numpy as np
@@ -55,6 +54,7 @@ from leadthrough.safety.command import (
     reference_torque,
     supervised_torque,
 )
+from leadthrough.safety.events import EventLog, SafetyEvent
 from leadthrough.safety.limits import SafetyLimits, SafetyParameters
 from leadthrough.validation import real
 
@@ -65,23 +65,6 @@ class SupervisorState(StrEnum):
     TEACHING = "teaching"
     HOLDING = "holding"
     FAULT = "fault"
-
-
-@dataclass(frozen=True)
-class SafetyEvent:
-    """One entry of the supervisor's log.
-
-    Attributes:
-        t: Time of the control period it happened in [s].
-        kind: ``"fault"``, ``"tool_speed"``, ``"joint_speed"``, ``"soft_limit"``, ``"calibration"``,
-            ``"overrun"``, ``"reset"``, ``"mode"`` or ``"safe_stop_failed"`` (the safe stop
-            itself could not be computed or sent).
-        detail: One line saying what happened, with the joint and the value.
-    """
-
-    t: float
-    kind: str
-    detail: str
 
 
 class SafetySupervisor:
@@ -116,7 +99,7 @@ class SafetySupervisor:
         self._encoders = FrozenEncoders(self.n, self.parameters.stale_periods)
         self.state = SupervisorState.HOLDING
         self.fault_reason: str | None = None
-        self.events: list[SafetyEvent] = []
+        self._log_book = EventLog()
         self.overruns = 0
         self.max_tool_speed = 0.0
         self._t = 0.0
@@ -128,6 +111,11 @@ class SafetySupervisor:
                                           p.wall_damping_time])  # fmt: skip
         self._inside, self._fast = np.zeros(self.n, dtype=bool), np.zeros(self.n, dtype=bool)
         self._clear_episodes()
+
+    @property
+    def events(self) -> list[SafetyEvent]:
+        """Log of what happened, one entry per episode (not per period)."""
+        return self._log_book.events
 
     def use_model(self, dynamics: Dynamics) -> None:
         """Supervise with the model ``dynamics`` from now on (e.g. after a payload).
@@ -169,7 +157,7 @@ class SafetySupervisor:
 
     def log(self, kind: str, detail: str, t: float | None = None) -> None:
         """Add an event from outside (e.g. the control loop's), at ``t`` [s] or the latest."""
-        self.events.append(SafetyEvent(self._t if t is None else float(t), kind, detail))
+        self._log_book.add(self._t if t is None else t, kind, detail)
 
     def reset(self) -> None:
         """Clear a latched fault and go to HOLDING; frozen-encoder counters restart."""
@@ -256,7 +244,7 @@ class SafetySupervisor:
             self.overruns += 1
             if not self._in_overrun:
                 detail = f"control cycle took {duration * 1e3:.3g} ms > {self.dt * 1e3:.3g} ms"
-                self.events.append(SafetyEvent(float(t), "overrun", detail))
+                self._log_book.add(t, "overrun", detail)
         self._in_overrun = overrun
 
     def _supervised(
@@ -285,12 +273,13 @@ class SafetySupervisor:
                 model.tool_jacobian, teaching)  # fmt: skip
             any_fast, any_inside = bool(fast.any()), bool(inside.any())
         self._q_last_good = q
-        if any_fast or "joint_speed" in self._active:
+        episodes = self._log_book
+        if any_fast or episodes.under_way("joint_speed"):
             self._log_joint_speed(qd, fast.copy())
         if teaching and (speed > self.max_tool_speed or speed > self.parameters.tool_speed_limit
-                         or "tool_speed" in self._active):  # fmt: skip
+                         or episodes.under_way("tool_speed")):  # fmt: skip
             self._log_tool_speed(speed)  # (else: no new largest speed, no episode to open or end)
-        if any_inside or "soft_limit" in self._active:
+        if any_inside or episodes.under_way("soft_limit"):
             self._log_walls(q, inside.copy())
         if status == NOT_FINITE:
             self._fault("non-finite safety torque")
@@ -300,7 +289,7 @@ class SafetySupervisor:
     def _log_walls(self, q: FloatArray, inside: NDArray[np.bool_]) -> None:
         """One event for each joint that entered a wall this period."""
         limits, robot = self._limits, self.robot
-        for i in self._started("soft_limit", inside):
+        for i in self._log_book.started("soft_limit", inside):
             lower = q[i] < limits.wall_low[i]
             side, hard = ("lower", robot.q_min[i]) if lower else ("upper", robot.q_max[i])
             detail = f"joint {i + 1} entered the {side} soft limit at {q[i]:.4g} rad"
@@ -309,7 +298,7 @@ class SafetySupervisor:
     def _log_joint_speed(self, qd: FloatArray, fast: NDArray[np.bool_]) -> None:
         """One event for each joint that became too fast this period."""
         speed = self._limits.speed
-        for i in self._started("joint_speed", fast):
+        for i in self._log_book.started("joint_speed", fast):
             detail = f"joint {i + 1} speed {abs(qd[i]):.4g} rad/s above {speed[i]:.4g} rad/s"
             self._log("joint_speed", f"{detail}: braking")
 
@@ -318,7 +307,7 @@ class SafetySupervisor:
         limit = self.parameters.tool_speed_limit
         if speed > self.max_tool_speed:
             self.max_tool_speed = speed
-        if self._began("tool_speed", speed > limit):
+        if self._log_book.began("tool_speed", speed > limit):
             self._log("tool_speed", f"tool speed {speed:.3g} m/s above {limit:.3g} m/s: braking")
 
     def _safe_stop(self, qd: object) -> FloatArray:
@@ -333,7 +322,7 @@ class SafetySupervisor:
             hold = braking.safe_stop(self.dynamics, self._q_last_good, velocity, p.braking_time)
             return self._limits.saturated(hold)
         except Exception as error:  # the last resort must return a torque: zero, and say so
-            if self._began("safe_stop_failed", True):
+            if self._log_book.began("safe_stop_failed", True):
                 self._log("safe_stop_failed", f"safe stop failed ({type(error).__name__}: "
                           f"{error}): zero torque sent")  # fmt: skip
             return np.zeros(self.n)
@@ -362,31 +351,11 @@ class SafetySupervisor:
             self._fault(problem)
         return problem
 
-    def _began(self, key: str, active: bool) -> bool:
-        """Whether the one-flag episode ``key`` became active this period."""
-        if not active:
-            self._active.pop(key, None)
-            return False
-        started = key not in self._active
-        self._active[key] = _ACTIVE
-        return started
-
-    def _started(self, key: str, active: NDArray[np.bool_]) -> NDArray[np.intp]:
-        """Indices where ``key`` became active this period (for one event per episode)."""
-        if not active.any() and key not in self._active:
-            return np.empty(0, dtype=np.intp)
-        started = np.flatnonzero(active & ~self._active.get(key, np.zeros_like(active)))
-        if not active.any():
-            del self._active[key]
-            return started
-        self._active[key] = active
-        return started
-
     def _set_mode(self, mode: SupervisorState) -> None:
         if self.state in (SupervisorState.FAULT, mode):
             return
         self.state = mode
-        self._active.pop("tool_speed", None)
+        self._log_book.end("tool_speed")
         self._log("mode", f"mode {mode.value}")
 
     def _fault(self, reason: str) -> None:
@@ -399,16 +368,12 @@ class SafetySupervisor:
         self._log("fault", reason)
 
     def _log(self, kind: str, detail: str) -> None:
-        self.events.append(SafetyEvent(self._t, kind, detail))
+        self._log_book.add(self._t, kind, detail)
 
     def _clear_episodes(self) -> None:
         self._encoders.clear()
-        self._active: dict[str, NDArray[np.bool_]] = {}
+        self._log_book.clear()
 
 
 #: Placeholder reason while a fault is latched: ``_fault`` keeps the first reason only.
 _UNEXPLAINED = "invalid sample"
-
-#: The stored state of an active one-flag episode (see ``_began``).
-_ACTIVE = np.ones(1, dtype=bool)
-_ACTIVE.setflags(write=False)
