@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -160,3 +161,28 @@ class _ToolWrenchPrior(lt.LeadThrough):
 def tool_wrench_prior(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
     """The operator torque read as a wrench at the tool (:class:`_ToolWrenchPrior`)."""
     return _build(robot, mode, cls=_ToolWrenchPrior)
+
+
+def _scaled_margin(scale: float) -> Callable[[lt.RobotDescription, str], lt.LeadThrough]:
+    """A factory whose law removes ``scale`` times the friction the model may overstate."""
+
+    class _ScaledMarginLaw(ActiveLaw):
+        compiled = False
+
+        def _friction_margin(self, q: Any, qd: Any) -> Any:
+            return scale * super()._friction_margin(q, qd)
+
+    class _ScaledMargin(lt.LeadThrough):
+        law_class = _ScaledMarginLaw
+
+    def factory(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+        return _build(robot, mode, cls=_ScaledMargin)
+
+    factory.__doc__ = f"The friction margin ({scale:g} of the default) of the operator torque."
+    return factory
+
+
+#: The friction margin the released arm needs, scaled down: how much lightness it costs.
+no_friction_margin = _scaled_margin(0.0)
+half_friction_margin = _scaled_margin(0.5)
+three_quarter_friction_margin = _scaled_margin(0.75)

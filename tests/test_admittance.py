@@ -11,6 +11,7 @@ from leadthrough.control.admittance import (
     keep_within,
     motion_sign,
     operator_weight,
+    settled_reference,
     virtual_damping,
 )
 
@@ -112,3 +113,31 @@ def test_damping_weight_has_no_step_as_a_joint_starts_or_the_push_turns():
     sustained = np.linspace(-1.0, 1.0, 2001)
     weight = damping_weight(residual, sustained, np.ones(2001) * 0.999, sigma, knee)
     assert np.all(np.diff(weight) >= 0.0) and np.max(np.diff(weight)) < 0.01
+
+
+def test_a_resting_joint_nobody_pushes_draws_its_reference_to_where_it_is():
+    """Joints 10 mrad short of their reference: only the one at rest with no push follows.
+
+    At rest with no push the error decays as (1 − rate)^k; a joint the operator pushes
+    (weight → 1) or whose admittance moves keeps its reference: the spring then holds
+    what the operator put in.
+    """
+    q = np.zeros(3)
+    moving = motion_sign(np.array([0.0, 0.0, 0.3]), 0.01)  # at rest, at rest, moving
+    weight = np.array([0.0, 0.99, 0.0])  # nobody pushes, pushed, nobody pushes
+    rate = DT / (0.3 + DT)
+    q_ref = np.full(3, 0.01)
+    for _ in range(375):  # 1.5 s
+        q_ref = settled_reference(q_ref, q, moving, weight, rate)
+    np.testing.assert_allclose(q_ref[0], 0.01 * (1.0 - rate) ** 375, rtol=1e-12)
+    assert q_ref[0] < 1e-4 and q_ref[1] > 0.0095 and q_ref[2] > 0.009
+
+
+def test_settled_reference_has_no_step_in_speed_or_weight():
+    """Continuous in the reference velocity and the weight: it cannot chatter."""
+    moving = motion_sign(np.linspace(-0.05, 0.05, 2001), 0.01)
+    q_ref = settled_reference(np.full(2001, 0.01), np.zeros(2001), moving, np.zeros(2001), 0.04)
+    assert np.max(np.abs(np.diff(q_ref))) < 1e-5
+    weight = np.linspace(0.0, 1.0, 2001)
+    q_ref = settled_reference(np.full(2001, 0.01), np.zeros(2001), np.zeros(2001), weight, 0.04)
+    assert np.all(np.diff(q_ref) > 0.0)

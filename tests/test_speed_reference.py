@@ -7,8 +7,9 @@ runs (a hand on the tool, the table, lead-through in the loop), computed at comm
 2b53732, before the speed work, and regenerated since for deliberate changes of
 behaviour only: the start-up calibration's gravity error put into the model and the
 Coulomb compensation's ceiling (a released arm stops in either mode), then the virtual
-damping weighed on the push that sustains a motion (``admittance.damping_weight``). A
-faster step must reproduce them.
+damping weighed on the push that sustains a motion (``admittance.damping_weight``), then
+the position reference of a resting joint nobody pushes drawn to where it is
+(``admittance.settled_reference``). A faster step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

@@ -10,9 +10,10 @@ Per period, after the observer (thesis §6.2, SPEC §6):
 2. :meth:`ActiveLaw.tracking`: the admittance model (virtual inertia k_M M(q) heavier than
    the arm, damping that rises once no push starts or sustains a joint's motion) turns
    that torque plus the virtual constraints' into references that stay clear of the
-   joint limits, tracked by a PD whose gains follow M(q) (thesis eqs. 6.4–6.6); near an
-   end-stop a push *away* from it is taken for the stop's reaction, not the operator's
-   (the failure of thesis §6.3.2).
+   joint limits, tracked by a PD whose gains follow M(q) (thesis eqs. 6.4–6.6); a joint
+   that rests with no push has its reference drawn to where it is, so the PD's spring
+   never holds a stopped joint against stiction; near an end-stop a push *away* from it
+   is taken for the stop's reaction, not the operator's (the failure of thesis §6.3.2).
 
 Both run compiled (:mod:`leadthrough.control.fused`) unless :attr:`ActiveLaw.compiled` is
 False: the readable NumPy methods below are the reference the tests hold them to. The
@@ -32,6 +33,7 @@ from leadthrough.control.admittance import (
     keep_within,
     motion_sign,
     operator_weight,
+    settled_reference,
     tracking_torque,
     virtual_damping,
 )
@@ -90,12 +92,13 @@ class ActiveLaw:
         self._speed_cap = parameters.assist_speed_fraction * robot.velocity_limits
         p = parameters  # the scalars of the compiled law (fused.DRIVE/ADMITTANCE_SCALARS)
         self._push_average = dt / (p.push_time + dt)  # the average over push_time
+        self._settle_rate = dt / (p.settle_time + dt)  # a resting reference's, settle_time
         self._drive_scalars = np.array([p.gravity_uncertainty, dt, p.bias_time,
                                         p.drive_gain_uncertainty, p.assist_knee])  # fmt: skip
         self._admittance_scalars = np.array([float(p.limit_aware), p.reanchor_error,
             p.damping_time, p.rest_damping, p.inertia_scale, dt,
             (2.0 * np.pi * p.position_bandwidth) ** 2, p.velocity_time, p.assist_knee,
-            p.rest_velocity, self._push_average])  # fmt: skip
+            p.rest_velocity, self._push_average, self._settle_rate])  # fmt: skip
         self._terms = np.zeros((4, self.n))  # the friction terms of a period (terms_into)
         self._term_rows = tuple(self._terms)  # its rows (views), for the compiled drive
         self.use_friction(nominal_friction)
@@ -242,7 +245,9 @@ class ActiveLaw:
         Virtual inertia k_M M(q) and damping :func:`virtual_damping` (``drive`` the
         admittance's input, ``push`` the same before the operator weight); the PD gains
         follow the joint inertias m_ii(q). A joint whose tracking is lost (an end-stop, a
-        collision) has its references re-anchored to the measured state: nothing winds up.
+        collision) has its references re-anchored to the measured state, and one that
+        rests with no push has its position reference drawn to where it is
+        (:func:`~leadthrough.control.admittance.settled_reference`): nothing winds up.
         """
         p = self.parameters
         if p.limit_aware:
@@ -253,7 +258,11 @@ class ActiveLaw:
         lost = np.abs(references.q_ref - q) > p.reanchor_error
         references = AdmittanceState(np.where(lost, q, references.q_ref),
                                      np.where(lost, qd, references.qd_ref))  # fmt: skip
-        self.damping_weight = self._damping_weight(push, references.qd_ref)
+        moving = motion_sign(references.qd_ref, p.rest_velocity)
+        self.damping_weight = self._damping_weight(push, moving)
+        q_ref = settled_reference(references.q_ref, q, moving, self.damping_weight,
+                                  self._settle_rate)  # fmt: skip
+        references = AdmittanceState(q_ref, references.qd_ref)
         damping = virtual_damping(inertia, p.damping_time, p.rest_damping, self.damping_weight)
         references = admittance_step(references, drive, mass, p.inertia_scale, damping, self.dt)
         references.qd_ref = np.clip(references.qd_ref, -self._speed_cap, self._speed_cap)
@@ -267,17 +276,17 @@ class ActiveLaw:
         self.feedback = tracking_torque(references, q, qd, kp, inertia / p.velocity_time)
         return self.feedback
 
-    def _damping_weight(self, push: FloatArray, qd_ref: FloatArray) -> FloatArray:
+    def _damping_weight(self, push: FloatArray, moving: FloatArray) -> FloatArray:
         """Weight of the push that starts or sustains each motion; updates the average.
 
         The whole push at rest, its average along the motion while a joint moves: the
         drag the law reads once nobody holds the arm raises D̃
-        (:func:`~leadthrough.control.admittance.damping_weight`).
+        (:func:`~leadthrough.control.admittance.damping_weight`). ``moving`` is the
+        :func:`~leadthrough.control.admittance.motion_sign` of the reference velocity.
         """
-        p = self.parameters
-        moving = motion_sign(qd_ref, p.rest_velocity)
         self.sustained = self.sustained + self._push_average * (push * moving - self.sustained)
-        return damping_weight(push, self.sustained, moving, self.uncertainty, p.assist_knee)
+        return damping_weight(push, self.sustained, moving, self.uncertainty,
+                              self.parameters.assist_knee)  # fmt: skip
 
     def _end_stop_reaction(self, q: FloatArray, drive: FloatArray) -> BoolArray:
         """Where a torque near a limit pushes away from it: the end-stop's reaction."""

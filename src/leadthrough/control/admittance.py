@@ -150,6 +150,33 @@ def damping_weight(
     return operator_weight(push, uncertainty, knee)
 
 
+def settled_reference(
+    q_ref: FloatArray, q: FloatArray, moving: FloatArray, weight: FloatArray, rate: float
+) -> FloatArray:
+    """Position reference of the joints that rest with no push, drawn to where they are [rad].
+
+    The PD's position error is a spring between the admittance's reference and the arm.
+    A joint that friction stopped short of its reference (the operator let go, or stopped
+    pushing) would be held against stiction by that spring for good: on a gearbox that
+    creeps under a steady load and the dither it pushes the joint on, and it would make
+    the joint jump when the stiction gives. Where nobody starts or sustains a motion
+    (``weight`` → 0) and the admittance has come to rest (``moving``, the
+    :func:`motion_sign` of the reference velocity, → 0), the reference follows the joint,
+    ``q_ref += rate (1 − |s|) (1 − w) (q − q_ref)``: the spring keeps what an operator put
+    in, and what holds the joint where it stopped against a slow creep, not the push that
+    was left when the motion ended. No threshold: the large errors of a lost tracking are
+    re-anchored at once instead.
+
+    Args:
+        q_ref: Position reference [rad].
+        q: Joint positions [rad].
+        moving: :func:`motion_sign` of the reference velocity [–].
+        weight: :func:`damping_weight` of every joint [–].
+        rate: Share of the error removed per period, ``dt / (settle_time + dt)`` [–].
+    """
+    return q_ref + rate * ((1.0 - np.abs(moving)) * (1.0 - weight)) * (q - q_ref)
+
+
 def virtual_damping(
     inertia: FloatArray, damping_time: float, rest_scale: float, weight: FloatArray
 ) -> FloatArray:

@@ -42,7 +42,7 @@ DRIVE_SCALARS = ("gravity_uncertainty", "dt", "bias_time", "drive_gain_uncertain
 #: is (2π f)² [1/s²]).
 ADMITTANCE_SCALARS = ("limit_aware", "reanchor_error", "damping_time", "rest_damping",
                       "inertia_scale", "dt", "position_gain", "velocity_time", "assist_knee",
-                      "rest_velocity", "push_average")  # fmt: skip
+                      "rest_velocity", "push_average", "settle_rate")  # fmt: skip
 
 
 @kernel
@@ -158,7 +158,7 @@ def admittance_law(q, qd, drive, constraint, mass, residuals, uncertainty, joint
         work: Scratch space, (n, n + 1).
     """
     (limit_aware, reanchor, damping_time, rest, scale, dt, position_gain, velocity_time, knee,
-     rest_velocity, average) = scalars  # fmt: skip
+     rest_velocity, average, settle) = scalars  # fmt: skip
     n = q.shape[0]
     for i in range(n):  # the reference system (k_M M + dt D̃) x = k_M M q̇_ref + dt τ_in
         tau_in = drive[i] + constraint[i]
@@ -183,6 +183,8 @@ def admittance_law(q, qd, drive, constraint, mass, residuals, uncertainty, joint
             z = push / (knee * floor)
             z2 = z * z
             damping_weight[i] = z2 / (1.0 + z2)
+        # the admittance at rest and no push: the reference follows the joint (settled_reference)
+        q_ref[i] += settle * ((1.0 - abs(moving)) * (1.0 - damping_weight[i])) * (q[i] - q_ref[i])
     for i in range(n):
         total = 0.0
         for j in range(n):

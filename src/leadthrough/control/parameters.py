@@ -74,6 +74,11 @@ class LeadThroughParameters:
             damping, so the arm stops instead of coasting on its virtual inertia. Shorter
             than a release's stop, longer than a stiff hand's oscillation (0.2 s at 5 Hz),
             whose alternating sign must not modulate the damping.
+        settle_time: Time over which the position reference of a joint whose admittance
+            rests with no push is drawn to where the joint is [s]
+            (:func:`~leadthrough.control.admittance.settled_reference`): the tracking
+            spring lets go of the push left when the motion ended, and holds the joint
+            where it stopped against a slower creep.
         assist_knee: Residual torque, in multiples of the model's uncertainty, of which half
             passes to the admittance [–] (:func:`~leadthrough.control.admittance.operator_weight`);
             0 passes everything (the thesis).
@@ -130,6 +135,7 @@ class LeadThroughParameters:
     inertia_scale: float = 2.0
     damping_time: float = 0.5
     push_time: float = 0.1
+    settle_time: float = 0.3
     rest_damping: float = 20.0
     assist_knee: float = 0.5
     drive_gain_uncertainty: float = 0.1
@@ -149,8 +155,9 @@ class LeadThroughParameters:
     def __post_init__(self) -> None:
         if self.mode not in ("passive", "active"):
             raise ParameterError("mode", f"'passive' or 'active', got {self.mode!r}")
-        positive = ("inertia_scale", "damping_time", "push_time", "velocity_time", "bias_time",
-                    "reanchor_error", "limit_zone", "assist_speed_fraction")  # fmt: skip
+        positive = ("inertia_scale", "damping_time", "push_time", "settle_time",
+                    "velocity_time", "bias_time", "reanchor_error", "limit_zone",
+                    "assist_speed_fraction")  # fmt: skip
         for name in positive:
             real(name, getattr(self, name), minimum=0.0, strict=True, error=ParameterError)
         measurement_delay(self.measurement_delay)
