@@ -33,6 +33,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/effort_plants.py
 	$(BIN)/python benchmarks/guiding_quality.py
 	$(BIN)/python benchmarks/guiding_quality.py --seeds 5-8
+	$(BIN)/python benchmarks/margin_tradeoff.py --out build/margin_runs
 	$(BIN)/python benchmarks/calibration_accuracy.py
 	$(BIN)/python benchmarks/real_identification.py
 	$(BIN)/python benchmarks/payload_twin.py

@@ -14,8 +14,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 import guiding_variants
 
 FACTORIES = ("no_weighting", "full_residual", "long_stroke", "long_stroke_trusted",
-             "strong_dither", "tool_wrench_prior",
-             "smooth_rate_guiding")  # fmt: skip
+             "strong_dither", "tool_wrench_prior", "smooth_rate_guiding",
+             "no_friction_margin", "half_friction_margin",
+             "three_quarter_friction_margin")  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -40,6 +41,23 @@ def test_a_variant_law_is_the_one_that_runs(robot, name):
     variant = _pushed(robot, getattr(guiding_variants, name)(robot, "active"))
     default = _pushed(robot, lt.LeadThrough(robot, mode="active"))
     assert np.max(np.abs(variant.operator_torque - default.operator_torque)) > 1e-3
+
+
+@pytest.mark.parametrize(
+    "name, scale",
+    [
+        ("no_friction_margin", 0.0),
+        ("half_friction_margin", 0.5),
+        ("three_quarter_friction_margin", 0.75),
+    ],
+)
+def test_scaled_margin_is_that_share_of_the_default(robot, name, scale):
+    """The margin variants remove ``scale`` times the default law's friction margin."""
+    q, qd = np.array(robot.home(), dtype=float), np.linspace(-0.3, 0.3, robot.n_joints)
+    default = lt.LeadThrough(robot, mode="active").law._friction_margin(q, qd)
+    assert np.max(np.abs(default)) > 0.01
+    variant = getattr(guiding_variants, name)(robot, "active").law._friction_margin(q, qd)
+    np.testing.assert_allclose(variant, scale * default, rtol=1e-12, atol=1e-15)
 
 
 def _pushed(robot: lt.RobotDescription, controller: lt.LeadThrough) -> lt.LeadThrough:
