@@ -28,7 +28,13 @@ import json
 import sys
 import time
 
-from leadthrough.experiments.guiding import GOALS, cases, evaluate, uncalibrated_factory
+from leadthrough.experiments.guiding import (
+    DIAGNOSTICS,
+    GOALS,
+    cases,
+    evaluate,
+    uncalibrated_factory,
+)
 from leadthrough.model import robots
 
 HEADER = (f"{'case':<30}{'effort a/p':>11}{'vib a/p':>9}{'speed p|a':>12}"
@@ -51,10 +57,11 @@ def print_summary(stats: dict[str, dict[str, float]], old: dict | None) -> None:
     """Median / worst with the goals (and the compared run's, when given)."""
     print(f"\n{'figure':<14}{'median':>9}{'worst':>9}  {'goal':<38}{'met':>4}"
           + ("   before: median / worst" if old else ""))  # fmt: skip
-    for name, _, goal, check in GOALS:
-        s = stats[name]
-        met = "yes" if check(s["median"], s["worst"]) else "NO"
-        before = ""
+    lines = [(name, goal, "yes" if check(stats[name]["median"], stats[name]["worst"]) else "NO")
+             for name, _, goal, check in GOALS]  # fmt: skip
+    lines += [(name, f"({text})", "") for name, _, text in DIAGNOSTICS]
+    for name, goal, met in lines:
+        s, before = stats[name], ""
         if old and name in old:
             before = f"   {old[name]['median']:.3g} / {old[name]['worst']:.3g}"
         print(f"{name:<14}{s['median']:>9.3g}{s['worst']:>9.3g}  {goal:<38}{met:>4}{before}")
