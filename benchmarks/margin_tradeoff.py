@@ -9,7 +9,7 @@ worst drift of a released active arm over 10 s against it, with the 1 mrad goal.
 
 Usage (about 12 min; ``--reuse`` draws from JSONs saved by an earlier run)::
 
-    python benchmarks/margin_tradeoff.py [--seeds 5-8]
+    python benchmarks/margin_tradeoff.py [--seeds 5-8] [--cases quick]
         [--out margin_runs] [--reuse] [--figure docs/figures/margin_tradeoff.png]
 """
 
@@ -31,9 +31,10 @@ VARIANTS = ((1.0, None), (0.75, "three_quarter_friction_margin"),
             (0.5, "half_friction_margin"), (0.0, "no_friction_margin"))  # fmt: skip
 
 
-def run(fraction: float, name: str | None, seeds: list[int], out: Path, reuse: bool) -> dict:
+def run(fraction: float, name: str | None, kind: str, seeds: list[int], out: Path,
+        reuse: bool) -> dict:  # fmt: skip
     """The benchmark's per-case figures with the margin at ``fraction`` (saved in ``out``)."""
-    path = out / f"margin_{fraction:g}.json"
+    path = out / f"margin_{fraction:g}{'' if kind == 'full' else '_' + kind}.json"
     if reuse and path.exists():
         return json.loads(path.read_text())["cases"]
     factory = None if name is None else getattr(guiding_variants, name)
@@ -42,7 +43,7 @@ def run(fraction: float, name: str | None, seeds: list[int], out: Path, reuse: b
     def report(case: str, _: dict) -> None:
         print(f"  margin {fraction:g}: {case} ({time.perf_counter() - start:.0f} s)", flush=True)
 
-    results, stats = evaluate("full", factory, robots.yumi(), report, seeds)
+    results, stats = evaluate(kind, factory, robots.yumi(), report, seeds)
     path.write_text(json.dumps({"cases": results, "summary": stats}, indent=1))
     return results
 
@@ -81,6 +82,12 @@ def draw(rows: list[tuple[float, dict]], figure: Path) -> None:
 def main() -> None:
     """Run (or reuse) the four margins, print the table, draw the figure."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument(
+        "--cases",
+        default="full",
+        choices=("full", "quick"),
+        help="quick: 4 cases, to check the script (< 2 min)",
+    )
     parser.add_argument("--seeds", default="1-4", help="plant seeds, e.g. 1-4 or 5-8")
     parser.add_argument("--out", default="margin_runs", help="folder of the per-margin JSONs")
     parser.add_argument("--reuse", action="store_true", help="load the JSONs already in --out")
@@ -90,7 +97,8 @@ def main() -> None:
     seeds = list(range(int(low), int(high or low) + 1))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    rows = [(fraction, run(fraction, name, seeds, out, args.reuse)) for fraction, name in VARIANTS]
+    rows = [(fraction, run(fraction, name, args.cases, seeds, out, args.reuse))
+            for fraction, name in VARIANTS]  # fmt: skip
     print(f"\n{'margin':>7}{'effort median':>15}{'worst':>8}{'drift worst [mrad]':>20}"
           f"{'cases ≥ 1 mrad':>16}")  # fmt: skip
     for fraction, cases in rows:
