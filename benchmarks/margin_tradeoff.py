@@ -10,7 +10,7 @@ worst drift of a released active arm over 10 s against it, with the 1 mrad goal.
 Usage (about 12 min; ``--reuse`` draws from JSONs saved by an earlier run)::
 
     python benchmarks/margin_tradeoff.py [--seeds 5-8] [--cases quick]
-        [--out margin_runs] [--reuse] [--figure docs/figures/margin_tradeoff.png]
+        [--out margin_runs] [--reuse] [--figure docs/bench/margin_tradeoff.png]
 """
 
 from __future__ import annotations
@@ -91,7 +91,7 @@ def main() -> None:
     parser.add_argument("--seeds", default="1-4", help="plant seeds, e.g. 1-4 or 5-8")
     parser.add_argument("--out", default="margin_runs", help="folder of the per-margin JSONs")
     parser.add_argument("--reuse", action="store_true", help="load the JSONs already in --out")
-    parser.add_argument("--figure", default="docs/figures/margin_tradeoff.png")
+    parser.add_argument("--figure", default="docs/bench/margin_tradeoff.png")
     args = parser.parse_args()
     low, _, high = args.seeds.partition("-")
     seeds = list(range(int(low), int(high or low) + 1))

@@ -52,3 +52,13 @@ def test_rewrite_and_stale_on_a_small_readme(tmp_path):
     assert "-->\n| a |\n|---|\n| 1 |\n<!-- end" in new
     assert stale(new, tmp_path) == ["number gone: not in docs/results/numbers.json"]
     assert rewrite(new, tmp_path) == new
+
+
+def test_every_benchmark_figure_names_the_script_that_draws_it():
+    """A docs/bench PNG the README shows exists, and its script writes it by default."""
+    shown = set(re.findall(r"docs/bench/([\w.-]+\.png)", README))
+    for name in shown:
+        assert (ROOT / "docs/bench" / name).stat().st_size > 10_000
+        scripts = [path for path in (ROOT / "benchmarks").glob("*.py")
+                   if f"docs/bench/{name}" in path.read_text()]  # fmt: skip
+        assert scripts, f"no benchmark writes docs/bench/{name}"
