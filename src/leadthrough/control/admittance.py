@@ -157,9 +157,8 @@ def settled_reference(
 
     The PD's position error is a spring between the admittance's reference and the arm.
     A joint that friction stopped short of its reference (the operator let go, or stopped
-    pushing) would be held against stiction by that spring for good: on a gearbox that
-    creeps under a steady load and the dither it pushes the joint on, and it would make
-    the joint jump when the stiction gives. Where nobody starts or sustains a motion
+    pushing) would stay loaded by that spring against stiction: under the dither it
+    creeps, and it jumps when the stiction gives. Where nobody starts or sustains a motion
     (``weight`` → 0) and the admittance has come to rest (``moving``, the
     :func:`motion_sign` of the reference velocity, → 0), the reference follows the joint,
     ``q_ref += rate (1 − |s|) (1 − w) (q − q_ref)``: the spring keeps what an operator put
