@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -261,10 +261,10 @@ def run_case(
         stop_time=stop_time,
         drift=drift,
         max_joint_speed=float(max(np.abs(held.qd_true).max(), np.abs(let_go.qd_true).max())),
-        observer_rms=observer[0],
-        observer_rms_moving=observer[3],
-        observer_coverage=observer[1],
-        observer_std=observer[2],
+        observer_rms=observer.rms,
+        observer_rms_moving=observer.rms_moving,
+        observer_coverage=observer.coverage,
+        observer_std=observer.std,
         calibrated=_calibrated(recorder.controller),
     )
 
@@ -299,9 +299,18 @@ def _release_figures(sim: SimulationResult, release: float) -> tuple[float, floa
 JOINT_MOVING = 0.01
 
 
+class _ObserverFigures(NamedTuple):
+    """The observer's figures of one run, each relative to the joints' peak torques [–]."""
+
+    rms: float
+    coverage: float
+    std: float
+    rms_moving: float
+
+
 def _observer_figures(
     sim: SimulationResult, recorder: _Recorder, moving: FloatArray
-) -> tuple[float, float, float, float]:
+) -> _ObserverFigures:
     """Observer RMS error, ±2 std coverage, median std and moving RMS, relative to peaks.
 
     The RMS error is over every sample while the hand moves; the coverage, the std and
@@ -316,14 +325,14 @@ def _observer_figures(
     estimate = np.array(recorder.estimate)[moving]
     std = np.array(recorder.std)[moving]
     if not np.all(np.isfinite(estimate)):
-        return np.nan, np.nan, np.nan, np.nan
+        return _ObserverFigures(np.nan, np.nan, np.nan, np.nan)
     peak = np.abs(truth).max(axis=0)
     used = peak >= 0.1 * peak.max()
     error = (estimate - truth)[:, used]
     rms = np.sqrt(np.mean(error**2, axis=0)) / peak[used]
     joint_moving = np.abs(sim.qd_true[moving][:, used]) > JOINT_MOVING
     if not np.any(joint_moving):
-        return float(rms.mean()), np.nan, np.nan, np.nan
+        return _ObserverFigures(float(rms.mean()), np.nan, np.nan, np.nan)
     relative_std = std[:, used] / peak[used]
     coverage = np.mean((np.abs(error) <= 2.0 * std[:, used])[joint_moving])
     spread = np.median(relative_std[joint_moving])
@@ -331,7 +340,8 @@ def _observer_figures(
     counts = joint_moving.sum(axis=0)
     seen = counts > 0  # the RMS over each joint's own moving samples, mean over joints
     rms_moving = np.sqrt(squared[seen] / counts[seen]) / peak[used][seen]
-    return float(rms.mean()), float(coverage), float(spread), float(rms_moving.mean())
+    return _ObserverFigures(float(rms.mean()), float(coverage), float(spread),
+                            float(rms_moving.mean()))  # fmt: skip
 
 
 #: The goals of issue 13: (figure, worst end, goal text, check on (median, worst)).
