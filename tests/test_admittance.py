@@ -8,6 +8,7 @@ from leadthrough.control.admittance import (
     admittance_step,
     damping_weight,
     dead_zone,
+    braking_cap,
     keep_within,
     motion_sign,
     operator_weight,
@@ -55,6 +56,30 @@ def test_references_stop_at_the_bounds():
     kept = keep_within(state, np.full(3, -1.0), np.full(3, 1.0))
     np.testing.assert_allclose(kept.q_ref, [1.0, -1.0, 0.0])
     np.testing.assert_allclose(kept.qd_ref, [0.0, 0.3, -0.3])
+
+
+def test_braking_cap_stops_a_reference_at_its_bound_at_constant_deceleration():
+    """Integrated at the cap, a reference brakes within ``zone`` and stops at the bound.
+
+    The deceleration stays within 10 % (the discretisation) of cap² / (2 zone) until the
+    last periods (discrete steps down from below 5 % of the cap),
+    the bound is reached, and away from the bound only the cap acts.
+    """
+    cap, zone, dt, high = np.array([2.0]), 0.2, 0.001, np.array([1.0])
+    low = np.array([-1.0])
+    q, v, speeds = np.array([0.0]), np.array([0.0]), []
+    for _ in range(3000):
+        v = braking_cap(q, np.array([10.0]), low, high, cap, zone)  # always pushed on
+        q = np.minimum(q + dt * v, high)  # the law's keep_within
+        speeds.append(v[0])
+    speeds = np.array(speeds)
+    assert q[0] == high[0] and speeds[-1] == 0.0
+    deceleration = -np.diff(speeds) / dt
+    braking = speeds[:-1] > 0.05 * cap[0]  # the last periods stop from below 5 % of the cap
+    assert np.max(deceleration[braking]) <= cap[0] ** 2 / (2 * zone) * 1.1
+    assert speeds[0] == cap[0]  # far from the bound: only the cap
+    away = braking_cap(high, np.array([-10.0]), low, high, cap, zone)
+    np.testing.assert_allclose(away, -cap)  # leaving the bound is not braked
 
 
 def test_operator_weight_is_smooth_monotone_and_never_amplifies():

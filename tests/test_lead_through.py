@@ -123,11 +123,15 @@ def test_sixty_second_session_is_stable(yumi, friction):
 
 
 def test_thesis_settings_run_away_from_the_end_stop_defaults_do_not(yumi, friction):
-    """Thesis §6.3.2: its settings turn the end-stop into motion; the defaults stay put."""
+    """Thesis §6.3.2: its settings turn the end-stop into motion; the defaults stay put.
+
+    Released inside the supervisor's soft wall, the joint is pushed out of the wall and
+    no further than the wall is wide; the thesis' settings run away.
+    """
     unstable = end_stop(yumi, LeadThroughParameters.thesis_unstable(), friction)
     default = end_stop(yumi, None, friction)
     assert unstable.travel_after_release > 0.2
-    assert default.travel_after_release < 0.05
+    assert default.travel_after_release < LeadThroughParameters().safety.soft_limit_margin
 
 
 def test_random_pushes_up_to_100_newton_stay_within_limits(yumi, friction):

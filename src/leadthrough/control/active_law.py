@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 from leadthrough.control.admittance import (
     AdmittanceState,
     admittance_step,
+    braking_cap,
     damping_weight,
     dead_zone,
     keep_within,
@@ -98,7 +99,7 @@ class ActiveLaw:
         self._admittance_scalars = np.array([float(p.limit_aware), p.reanchor_error,
             p.damping_time, p.rest_damping, p.inertia_scale, dt,
             (2.0 * np.pi * p.position_bandwidth) ** 2, p.velocity_time, p.assist_knee,
-            p.rest_velocity, self._push_average, self._settle_rate])  # fmt: skip
+            p.rest_velocity, self._push_average, self._settle_rate, p.limit_zone])  # fmt: skip
         self._terms = np.zeros((4, self.n))  # the friction terms of a period (terms_into)
         self._term_rows = tuple(self._terms)  # its rows (views), for the compiled drive
         self.use_friction(nominal_friction)
@@ -264,13 +265,21 @@ class ActiveLaw:
                                   self._settle_rate)  # fmt: skip
         references = AdmittanceState(q_ref, references.qd_ref)
         damping = virtual_damping(inertia, p.damping_time, p.rest_damping, self.damping_weight)
-        references = admittance_step(references, drive, mass, p.inertia_scale, damping, self.dt)
-        references.qd_ref = np.clip(references.qd_ref, -self._speed_cap, self._speed_cap)
+        velocity = admittance_step(references, drive, mass, p.inertia_scale, damping,
+                                   self.dt).qd_ref  # fmt: skip
         if p.limit_aware:
             # a joint the operator holds inside the limit zone is held where it is, not
             # pulled back out: keeping it out of the zone is the supervisor's soft wall
-            references = keep_within(references, np.minimum(self._reference_low, q),
-                                     np.maximum(self._reference_high, q))  # fmt: skip
+            low = np.minimum(self._reference_low, q)
+            high = np.maximum(self._reference_high, q)
+            velocity = braking_cap(references.q_ref, velocity, low, high, self._speed_cap,
+                                   p.limit_zone)  # fmt: skip
+            references = keep_within(
+                AdmittanceState(references.q_ref + self.dt * velocity, velocity), low, high
+            )
+        else:
+            velocity = np.clip(velocity, -self._speed_cap, self._speed_cap)
+            references = AdmittanceState(references.q_ref + self.dt * velocity, velocity)
         self.references = references
         kp = inertia * (2.0 * np.pi * p.position_bandwidth) ** 2
         self.feedback = tracking_torque(references, q, qd, kp, inertia / p.velocity_time)

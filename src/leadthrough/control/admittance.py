@@ -198,6 +198,31 @@ def virtual_damping(
     return inertia / damping_time * (1.0 + rest_scale) / (1.0 + rest_scale * weight)
 
 
+def braking_cap(
+    q_ref: FloatArray, qd_ref: FloatArray, low: FloatArray, high: FloatArray,
+    cap: FloatArray, zone: float,
+) -> FloatArray:  # fmt: skip
+    """Velocity reference within its speed cap and a braking curve to its bounds [rad/s].
+
+    Towards a bound at distance ``d`` the reference may move at most ``cap · √(d / zone)``:
+    the speed from which a constant deceleration ``cap² / (2 zone)`` stops it at the bound.
+    A joint guided into its limit zone slows down smoothly instead of being stopped at once
+    by the bound (and thrown by the PD into the supervisor's wall); away from a bound, or
+    farther than ``zone`` from it, only the cap applies.
+
+    Args:
+        q_ref: Position reference now [rad].
+        qd_ref: The admittance's new velocity reference [rad/s].
+        low: Lower bound of the position reference [rad].
+        high: Upper bound [rad].
+        cap: Speed cap [rad/s].
+        zone: Braking distance from the cap to rest [rad].
+    """
+    ahead = np.where(qd_ref > 0.0, high - q_ref, q_ref - low)
+    braking = cap * np.sqrt(np.clip(ahead / zone, 0.0, 1.0))
+    return cast(FloatArray, np.clip(qd_ref, -braking, braking))
+
+
 def keep_within(state: AdmittanceState, low: FloatArray, high: FloatArray) -> AdmittanceState:
     """Clamp the position reference into [low, high]; stop its velocity at the bound."""
     clamped = np.clip(state.q_ref, low, high)

@@ -42,7 +42,7 @@ DRIVE_SCALARS = ("gravity_uncertainty", "dt", "bias_time", "drive_gain_uncertain
 #: is (2π f)² [1/s²]).
 ADMITTANCE_SCALARS = ("limit_aware", "reanchor_error", "damping_time", "rest_damping",
                       "inertia_scale", "dt", "position_gain", "velocity_time", "assist_knee",
-                      "rest_velocity", "push_average", "settle_rate")  # fmt: skip
+                      "rest_velocity", "push_average", "settle_rate", "limit_zone")  # fmt: skip
 
 
 @kernel
@@ -158,7 +158,7 @@ def admittance_law(q, qd, drive, constraint, mass, residuals, uncertainty, joint
         work: Scratch space, (n, n + 1).
     """
     (limit_aware, reanchor, damping_time, rest, scale, dt, position_gain, velocity_time, knee,
-     rest_velocity, average, settle) = scalars  # fmt: skip
+     rest_velocity, average, settle, zone) = scalars  # fmt: skip
     n = q.shape[0]
     for i in range(n):  # the reference system (k_M M + dt D̃) x = k_M M q̇_ref + dt τ_in
         tau_in = drive[i] + constraint[i]
@@ -214,13 +214,17 @@ def admittance_law(q, qd, drive, constraint, mass, residuals, uncertainty, joint
         work[i, n] = total / work[i, i]
     for i in range(n):
         velocity = work[i, n]
-        position = q_ref[i] + dt * velocity
         cap = joint[6, i]
-        velocity = velocity if velocity > -cap or velocity != velocity else -cap
-        velocity = velocity if velocity < cap or velocity != velocity else cap
         if limit_aware != 0.0:  # hold a joint where it is inside the limit zone
             low = joint[1, i] if joint[1, i] < q[i] else q[i]
             high = joint[2, i] if joint[2, i] > q[i] else q[i]
+            ahead = high - q_ref[i] if velocity > 0.0 else q_ref[i] - low  # braking_cap
+            share = ahead / zone if ahead < zone else 1.0
+            cap = cap * math.sqrt(share) if share > 0.0 else 0.0
+        velocity = velocity if velocity > -cap or velocity != velocity else -cap
+        velocity = velocity if velocity < cap or velocity != velocity else cap
+        position = q_ref[i] + dt * velocity
+        if limit_aware != 0.0:
             position = position if position > low or position != position else low
             position = position if position < high or position != position else high
             if (position <= low and velocity < 0) or (position >= high and velocity > 0):
