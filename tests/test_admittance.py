@@ -6,9 +6,9 @@ import pytest
 from leadthrough.control.admittance import (
     AdmittanceState,
     admittance_step,
+    braking_cap,
     damping_weight,
     dead_zone,
-    braking_cap,
     keep_within,
     motion_sign,
     operator_weight,

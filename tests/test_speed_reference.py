@@ -9,7 +9,9 @@ behaviour only: the start-up calibration's gravity error put into the model and 
 Coulomb compensation's ceiling (a released arm stops in either mode), then the virtual
 damping weighed on the push that sustains a motion (``admittance.damping_weight``), then
 the position reference of a resting joint nobody pushes drawn to where it is
-(``admittance.settled_reference``). A faster step must reproduce them.
+(``admittance.settled_reference``), then the references braking to their bounds
+(``admittance.braking_cap``) and the joints' estimates read together as a force at the
+tool (``estimation.tool_force``). A faster step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

@@ -9,7 +9,10 @@ One step, in order, on the robot's sample (its time stamp is the one clock):
 2. feed-forward ``τ_ff = G(q) + τ_fc(q̇) + dither`` (thesis eq. 6.3, §5.3), the Coulomb
    compensation below the friction surely there minus the gravity error that may be;
 3. the Kalman observer estimates ``τ̂_ext`` from the measured torque (or the command
-   sent, if the robot measures none), dither removed;
+   sent, if the robot measures none), dither removed, each joint alone; the joints'
+   estimates are then read together as a force at the tool
+   (:mod:`~leadthrough.estimation.tool_force`): a joint that stiction holds takes its
+   share of the force the sliding joints read;
 4. the operator torque: model error must not become motion (a learned bias and the
    friction the model may overstate removed, the rest weighed by the model's own
    uncertainty; :class:`~leadthrough.control.active_law.ActiveLaw`);
@@ -37,6 +40,7 @@ from leadthrough.control.parameters import LeadThroughParameters, Mode
 from leadthrough.control.warm_up import exercise
 from leadthrough.errors import ParameterError, failure
 from leadthrough.estimation.observer import MomentumObserver
+from leadthrough.estimation.tool_force import ToolForceFusion
 from leadthrough.estimation.wrench import ToolWrench, tool_wrench
 from leadthrough.friction.model import FrictionModel
 from leadthrough.logs.sample import JointState, joint_state
@@ -121,6 +125,7 @@ class LeadThrough:
             p.dither, measurement_delay=None, friction_error=self.law.friction_error,
             gravity_uncertainty=p.gravity_uncertainty)  # fmt: skip
         self.observer = MomentumObserver(self.dynamics, friction, self.dt, p.observer)
+        self.fusion = None if p.tool_force is None else ToolForceFusion(friction, p.tool_force)
 
     # --- state a user may read ---------------------------------------------------------
 
@@ -136,12 +141,29 @@ class LeadThrough:
 
     @property
     def tau_ext_hat(self) -> FloatArray:
-        """Latest estimated external torque [Nm] (bias not removed)."""
-        return self.observer.tau_ext_hat
+        """Latest estimated external torque [Nm] (bias not removed).
+
+        The joints' own estimates (``observer.tau_ext_hat``, :attr:`joint_std`) read
+        together as a force at the tool (``parameters.tool_force``,
+        :mod:`~leadthrough.estimation.tool_force`) once guiding has begun; the joint's own
+        during the calibration and with ``tool_force = None``.
+        """
+        fusion = self.fusion
+        if fusion is None or not fusion.updated:
+            return self.observer.tau_ext_hat
+        return fusion.mean
 
     @property
     def std(self) -> FloatArray:
-        """How far :attr:`tau_ext_hat` may be off, one standard deviation [Nm].
+        """How far :attr:`tau_ext_hat` may be off, one standard deviation [Nm]."""
+        fusion = self.fusion
+        if fusion is None or not fusion.updated:
+            return self.joint_std
+        return fusion.std
+
+    @property
+    def joint_std(self) -> FloatArray:
+        """How far each joint's own estimate (``observer.tau_ext_hat``) may be off [Nm].
 
         The model's two errors at the latest sample, independent: the friction model's
         (the observer's ``error_std``; large at rest, where a push below breakaway is
@@ -162,14 +184,14 @@ class LeadThrough:
     def tool_wrench(self) -> ToolWrench:
         """Estimated wrench on the tool at the TCP, world axes, with its covariance.
 
-        ``F̂ = (Jᵀ)⁺ τ̂_ext`` with the TCP Jacobian of the latest sample and the
-        estimate's :attr:`std` (see :mod:`leadthrough.estimation.wrench`); zero before the
-        first.
+        ``F̂ = (Jᵀ)⁺ τ̂_ext`` with the TCP Jacobian of the latest sample, each joint's own
+        estimate and its :attr:`joint_std` (see :mod:`leadthrough.estimation.wrench`); zero
+        before the first.
         """
         model = self.model
         if model is None:
             return ToolWrench(np.zeros(3), np.zeros(3), np.zeros((6, 6)))
-        return tool_wrench(model.tool_jacobian, self.observer.tau_ext_hat, self.std)
+        return tool_wrench(model.tool_jacobian, self.observer.tau_ext_hat, self.joint_std)
 
     @property
     def operator_torque(self) -> FloatArray:
@@ -379,6 +401,9 @@ class LeadThrough:
         applied, dither = self._measured(tau_measured)
         self._stage = "observer"
         estimate = self.observer.update(q, qd, applied - dither, model)
+        if self.fusion is not None:
+            self._stage = "tool force"
+            estimate = self.fusion.update(estimate, self.joint_std, model.tool_jacobian)
         self._stage = "operator torque"
         self.law.operator_torque(estimate, q, qd, model.gravity)
         torque = feed_forward.total

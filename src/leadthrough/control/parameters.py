@@ -29,6 +29,7 @@ from leadthrough.control.dither import DitherParameters
 from leadthrough.control.feedforward import measurement_delay
 from leadthrough.errors import ParameterError
 from leadthrough.estimation.observer import ObserverParameters
+from leadthrough.estimation.tool_force import ToolForceParameters
 from leadthrough.friction.compensation import CoulombCompensationParameters
 from leadthrough.model.description import RobotDescription
 from leadthrough.safety.supervisor import SafetyParameters
@@ -56,6 +57,10 @@ class LeadThroughParameters:
             estimate that lags less leaves the admittance more stability margin, see
             :mod:`leadthrough.experiments.stability`).
         safety: Safety supervisor limits (SPEC §7).
+        tool_force: The joints' estimates read together as a force at the tool
+            (:mod:`leadthrough.estimation.tool_force`): a joint that stiction holds takes
+            its share of the force the sliding joints read. None keeps each joint's own
+            estimate (an operator who pushes the links, not the tool).
         inertia_scale: k_M of M̃ = k_M M(q) [–]. Above 1 on purpose: the estimated operator
             torque lags the true one (observer bandwidth, delay), and an admittance lighter
             than the arm turns that lag into negative damping that a stiff hand makes
@@ -132,6 +137,7 @@ class LeadThroughParameters:
         default_factory=lambda: ObserverParameters(torque_noise=100.0)
     )
     safety: SafetyParameters = field(default_factory=SafetyParameters)
+    tool_force: ToolForceParameters | None = field(default_factory=ToolForceParameters)
     inertia_scale: float = 2.0
     damping_time: float = 0.5
     push_time: float = 0.1
@@ -261,9 +267,9 @@ class LeadThroughParameters:
 
 _NESTED = {"compensation": CoulombCompensationParameters, "dither": DitherParameters,
            "observer": ObserverParameters, "safety": SafetyParameters,
-           "calibration": CalibrationParameters}  # fmt: skip
+           "calibration": CalibrationParameters, "tool_force": ToolForceParameters}  # fmt: skip
 #: Nested tables that ``false`` switches off.
-_OPTIONAL = ("dither", "calibration")
+_OPTIONAL = ("dither", "calibration", "tool_force")
 
 
 def from_dict(kind: type, data: dict[str, Any], where: str) -> Any:

@@ -1,0 +1,133 @@
+"""The joints' estimates read together as a force at the tool (estimation/tool_force.py).
+
+Held to the posterior computed from the n × n covariances, to the torques of a known
+force at the tool (a sticking joint recovers its share from the sliding ones), and to
+its own std both ways: it covers the truth about as often as it says, and it is narrow
+where the sliding joints determine the force.
+"""
+
+import numpy as np
+import pytest
+
+import leadthrough as lt
+from leadthrough.errors import ParameterError
+from leadthrough.estimation.tool_force import (
+    ToolForceParameters,
+    _fuse,
+    fuse,
+    fuse_reference,
+)
+from leadthrough.experiments.guiding import Case, run_case
+
+ROBOT = lt.robots.yumi()
+DYNAMICS = lt.Dynamics(ROBOT)
+#: Each joint's own std: sliding joints 1–4 read to 0.05 Nm, sticking joints 5–7 not at all.
+SLIDING, STUCK = 0.05, 1.0
+
+
+def _readings(rng, pose, force, other_std):
+    """Torques of ``force`` at the TCP plus ε, and each joint's reading and std."""
+    jacobian = DYNAMICS.tool_jacobian(pose)
+    truth = jacobian[:3].T @ force + rng.normal(0.0, other_std)
+    std = np.array([SLIDING] * 4 + [STUCK] * 3)
+    reading = np.where(std == SLIDING, truth + rng.normal(0.0, std), 0.0)  # stuck: reads 0
+    return jacobian, truth, reading, std
+
+
+def test_the_compiled_3x3_form_is_the_posterior_of_the_full_covariances():
+    """Compiled and interpreted 3 × 3 form against P (P + S)⁻¹ τ̂ and P − P (P + S)⁻¹ P."""
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        jacobian = rng.normal(0.0, 0.4, (6, 7))
+        estimate, std = rng.normal(0.0, 1.0, 7), rng.uniform(0.01, 2.0, 7)
+        other = rng.uniform(0.01, 0.5, 7)
+        expected = fuse_reference(estimate, std, jacobian, other, 50.0)
+        compiled = fuse(estimate, std, jacobian, other, 50.0, np.empty(7), np.empty(7))
+        interpreted = np.empty(7), np.empty(7)
+        _fuse.py_func(estimate, std, jacobian, other, 1.0 / 50.0**2, *interpreted)
+        for result in (compiled, interpreted):
+            np.testing.assert_allclose(result[0], expected[0], rtol=1e-9, atol=1e-12)
+            np.testing.assert_allclose(result[1], expected[1], rtol=1e-9, atol=1e-12)
+
+
+def test_a_sticking_joint_recovers_its_share_of_the_force_the_sliding_ones_read():
+    """Joints 5–7 read nothing; their torques come back from joints 1–4 with a narrow std."""
+    rng = np.random.default_rng(1)
+    other = np.full(7, 1e-3)
+    jacobian, truth, reading, std = _readings(rng, ROBOT.home(), np.array([8.0, -5.0, 6.0]),
+                                              other)  # fmt: skip
+    mean, fused_std = fuse_reference(reading, std, jacobian, other, 100.0)
+    stuck = std == STUCK
+    assert np.all(np.abs(mean - truth)[stuck] <= 3.0 * fused_std[stuck])
+    assert np.all(fused_std[stuck] < 0.2 * STUCK)
+    assert np.max(np.abs(mean - truth)) < 0.1  # what a sliding joint reads to 0.05 Nm
+
+
+def test_a_sliding_joint_keeps_its_own_reading():
+    """Own std ≪ σ_ε: the fused value is the joint's own reading (within 1 % of σ_ε)."""
+    rng = np.random.default_rng(2)
+    other = np.full(7, 0.5)
+    jacobian, _, reading, std = _readings(rng, ROBOT.home(), np.array([3.0, 2.0, -4.0]), other)
+    mean, fused_std = fuse_reference(reading, std, jacobian, other, 100.0)
+    sliding = std == SLIDING
+    np.testing.assert_allclose(mean[sliding], reading[sliding], atol=0.01 * 0.5)
+    assert np.all(fused_std[sliding] <= std[sliding])
+
+
+def test_the_band_covers_the_truth_as_often_as_it_says_and_no_more():
+    """±2 std covers 90–99 % of sampled forces and poses, and the stuck joints' band narrows."""
+    rng = np.random.default_rng(3)
+    other = 0.3 * lt.FrictionModel.from_robot(ROBOT).coulomb
+    covered, narrowing = [], []
+    for _ in range(400):
+        pose = ROBOT.home() + rng.normal(0.0, 0.3, 7)
+        jacobian, truth, reading, std = _readings(rng, pose, rng.normal(0.0, 10.0, 3), other)
+        mean, fused_std = fuse(reading, std, jacobian, other, 100.0, np.empty(7), np.empty(7))
+        covered.append(np.abs(mean - truth) <= 2.0 * fused_std)
+        narrowing.append(fused_std[std == STUCK] / STUCK)
+    coverage = np.mean(covered)
+    assert 0.9 <= coverage <= 0.99
+    assert np.median(narrowing) < 0.5
+
+
+def test_parameters_are_checked_and_none_keeps_each_joints_estimate():
+    """Bad priors name their field; ``tool_force=None`` reports the observer's own."""
+    with pytest.raises(ParameterError, match="spread"):
+        ToolForceParameters(spread=-1.0)
+    with pytest.raises(ParameterError, match="force_std"):
+        ToolForceParameters(force_std=0.0)
+    parameters = lt.LeadThroughParameters(tool_force=None)
+    controller = lt.LeadThrough(ROBOT, "active", 0.004, parameters=parameters)
+    q = ROBOT.home()
+    controller.step(q, np.zeros(7), DYNAMICS.gravity(q))
+    assert controller.fusion is None
+    np.testing.assert_array_equal(controller.tau_ext_hat, controller.observer.tau_ext_hat)
+    np.testing.assert_array_equal(controller.std, controller.joint_std)
+
+
+def test_the_controller_reports_the_fusion_of_its_joints_estimates():
+    """``tau_ext_hat`` and ``std`` are the posterior of the observer's and ``joint_std``."""
+    controller = lt.LeadThrough(ROBOT, "active", 0.004)
+    q = ROBOT.home()
+    tau = DYNAMICS.gravity(q) + DYNAMICS.tool_jacobian(q)[:3].T @ np.array([0.0, 5.0, 0.0])
+    for _ in range(50):
+        controller.step(q, np.zeros(7), tau)
+    expected = fuse_reference(controller.observer.tau_ext_hat, controller.joint_std,
+                              controller.model.tool_jacobian, controller.fusion.other_std,
+                              ToolForceParameters().force_std)  # fmt: skip
+    np.testing.assert_allclose(controller.tau_ext_hat, expected[0], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(controller.std, expected[1], rtol=1e-9, atol=1e-12)
+
+
+def test_guiding_the_fused_estimate_is_closer_to_the_truth_than_each_joints_own():
+    """A sampled plant: the error over the motion shrinks, the band still covers ≥ 90 %."""
+    case = Case("dry", 1, "stiff", "sideways")
+
+    def own(robot, mode):
+        parameters = lt.LeadThroughParameters(tool_force=None)
+        return lt.LeadThrough(robot, mode=mode, dt=0.004, parameters=parameters,
+                              calibrate=True)  # fmt: skip
+
+    fused, alone = run_case(case, "active"), run_case(case, "active", own)
+    assert fused.observer_rms < 0.85 * alone.observer_rms
+    assert fused.observer_coverage >= 0.9
