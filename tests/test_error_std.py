@@ -113,3 +113,21 @@ def test_a_joint_the_calibration_did_not_measure_keeps_all_of_its_gravity_uncert
         measured, friction, np.hypot(friction, controller.parameters.gravity_std * gravity)
     )
     np.testing.assert_allclose(controller.joint_std, expected, rtol=1e-12)
+
+
+def test_the_compiled_step_computes_error_std_as_the_friction_model_does():
+    """The filter's compiled step writes ``error_std``; it equals the model's at the sample."""
+    robot = lt.robots.yumi()
+    dynamics = lt.Dynamics(robot)
+    observer = MomentumObserver(dynamics, dt=0.004)
+    rng = np.random.default_rng(4)
+    q = robot.home()
+    observer.update(q, np.zeros(7), dynamics.gravity(q))
+    for _ in range(20):
+        q, qd = robot.home() + rng.normal(0.0, 0.3, 7), rng.normal(0.0, 0.05, 7)
+        observer.update(q, qd, dynamics.gravity(q))
+        compiled = observer.error_std
+        mean, std = observer.friction.mean_and_std(qd, q)
+        coulomb = np.maximum(std**2 - observer.friction.noise_std**2, 0.0)
+        expected = np.sqrt(consider_variance(mean, coulomb, observer.friction.level_std))
+        np.testing.assert_allclose(compiled, expected, rtol=1e-9, atol=1e-12)

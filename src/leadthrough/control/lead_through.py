@@ -27,11 +27,13 @@ the component, and the safe stop is sent in the same period.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from leadthrough.compiled import kernel
 from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.calibration import Calibration, CalibrationRun
 from leadthrough.control.constraints import VirtualConstraint, constraint_torque
@@ -176,9 +178,10 @@ class LeadThrough:
         model = self.model
         if model is None:
             return friction
-        reference = 0.0 if self._gravity_reference is None else self._gravity_reference
-        gravity = self.parameters.gravity_std * np.abs(model.gravity - reference)
-        return np.sqrt(friction**2 + gravity**2)
+        reference = (
+            self._no_constraint if self._gravity_reference is None else self._gravity_reference
+        )
+        return _with_gravity_error(friction, model.gravity, reference, self.parameters.gravity_std)
 
     @property
     def tool_wrench(self) -> ToolWrench:
@@ -415,3 +418,11 @@ class LeadThrough:
             return (torque + constraint if self.constraints else torque), feed_forward.dither
         self._stage = "admittance"
         return torque + self.law.tracking(q, qd, constraint, model.mass), feed_forward.dither
+
+
+@kernel
+def _with_gravity_error(friction, gravity, reference, gravity_std):
+    """``√(friction² + (gravity_std · |G − G_cal|)²)`` per joint, in place [Nm] (joint_std)."""
+    for i in range(friction.shape[0]):
+        friction[i] = math.hypot(friction[i], gravity_std * abs(gravity[i] - reference[i]))
+    return friction

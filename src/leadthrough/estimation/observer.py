@@ -172,10 +172,13 @@ class MomentumObserver:
             self._smooth = SmoothRateFilter(white, parameters.torque_rate_noise,
                                             parameters.measurement_noise, self.dt)  # fmt: skip
         # the filter's state, one array (one argument of the compiled step), rows: p, τ̂_ext,
-        # the previous drift, the covariances P11, P12, P22 and the std of τ̂_ext
-        self._filter = np.zeros((7, n))
+        # the previous drift, the covariances P11, P12, P22, the std of τ̂_ext and the
+        # friction model's error std at the sample (error_std, when the compiled step ran)
+        self._filter = np.zeros((8, n))
         self._p, self._tau, self._previous_drift = self._filter[0], self._filter[1], self._filter[2]
         self._cov_rows, self._std = self._filter[3:6], self._filter[6]
+        self._error_std = self._filter[7]
+        self._level_std = np.ascontiguousarray(self.friction.level_std, dtype=float)
         # the entries of Q_d that do not depend on Q_m (Q_m enters Q₁₁ as Q_m dt)
         self._q11_torque, self._q12, self._q22 = process_noise(
             np.zeros(n), parameters.torque_noise, self.dt
@@ -217,6 +220,8 @@ class MomentumObserver:
         """
         if self._smooth is not None or self._sample is None:
             return self.std
+        if self._error_in_filter:  # the compiled step computed it
+            return self._error_std.copy()
         q, qd = self._sample
         mean, std = self.friction.mean_and_std(qd, q)
         coulomb_variance = np.maximum(std**2 - self.friction.noise_std**2, 0.0)
@@ -226,6 +231,7 @@ class MomentumObserver:
         """Forget the estimate; the next update starts from the measured momentum."""
         self._initialised = False
         self._sample: tuple[FloatArray, FloatArray] | None = None
+        self._error_in_filter = False  # whether the latest step wrote error_std's row
         self._tau[:] = 0.0
         variance = self.parameters.torque_noise  # 1 s of random walk
         self._cov_rows[:2] = 0.0
@@ -260,7 +266,8 @@ class MomentumObserver:
             The estimated external torque [Nm].
         """
         q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
-        self._sample = (q, qd)  # for error_std, computed only when read
+        self._sample = (q, qd)  # for error_std, computed when read (or by the compiled step)
+        self._error_in_filter = False
         if model is None:
             model = self.dynamics.snapshot(q, qd)
         if self._initialised and self._levels is None and self._smooth is None and self.compiled:
@@ -270,7 +277,8 @@ class MomentumObserver:
                     terms = self.friction.terms_into(qd, q, self._terms)
                 _time_varying_step(self._filter, tau, model.mass, qd, model.coriolis_drift,
                                    model.gravity, terms, self.friction.noise_std,
-                                   self._constants)  # fmt: skip
+                                   self._level_std, self._constants)  # fmt: skip
+                self._error_in_filter = True
                 return self._tau.copy()
         momentum = model.mass @ qd
         if self._smooth is not None:
@@ -376,7 +384,7 @@ class MomentumObserver:
 
 @kernel
 def _time_varying_step(state, tau, mass, qd, coriolis_drift, gravity, terms, noise_std,
-                       constants):  # fmt: skip
+                       level_std, constants):  # fmt: skip
     """One step of the time-varying filter, all joints, in place (compiled, ~1 µs).
 
     The same arithmetic, in the same order, as :meth:`MomentumObserver.update` with
@@ -385,11 +393,13 @@ def _time_varying_step(state, tau, mass, qd, coriolis_drift, gravity, terms, noi
     :meth:`~leadthrough.friction.model.FrictionModel.sigmoid_terms` (as
     ``mean_and_std``), predict with the trapezoidal input, predict and update the 2×2
     covariance with Q_m = scale · std_f², correct the state with the gains. ``state``
-    is ``MomentumObserver._filter`` (rows p, τ̂_ext, previous drift, P11, P12, P22, std), ``terms``
-    are the friction terms, rows as :meth:`~leadthrough.friction.model.FrictionModel.terms_into`.
+    is ``MomentumObserver._filter`` (rows p, τ̂_ext, previous drift, P11, P12, P22, std,
+    and :attr:`~MomentumObserver.error_std`, written here), ``terms`` are the friction
+    terms, rows as :meth:`~leadthrough.friction.model.FrictionModel.terms_into`.
     """
     dt, scale, q11_torque, q12, q22, noise_d = constants
     p, tau_hat, previous_drift, cov, std = state[0], state[1], state[2], state[3:6], state[6]
+    error_std = state[7]
     n = p.shape[0]
     for i in range(n):
         momentum = 0.0
@@ -397,7 +407,9 @@ def _time_varying_step(state, tau, mass, qd, coriolis_drift, gravity, terms, noi
             momentum += mass[i, j] * qd[j]
         half_level, upper, lower = 0.5 * terms[0, i], terms[2, i], terms[3, i]
         friction_mean = half_level * (upper + lower) + terms[1, i]
-        friction_std = math.hypot(half_level * (upper - lower), noise_std[i])
+        coulomb_std = half_level * (upper - lower)
+        friction_std = math.hypot(coulomb_std, noise_std[i])
+        error_std[i] = math.hypot(coulomb_std, level_std[i] * friction_mean)
         drift = coriolis_drift[i] - gravity[i] - friction_mean
         u = tau[i] + 0.5 * (drift + previous_drift[i])
         previous_drift[i] = drift
