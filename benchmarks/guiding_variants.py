@@ -52,6 +52,11 @@ def _build(
     return lt.LeadThrough(robot, mode=mode, dt=0.004, parameters=parameters, calibrate=True)
 
 
+def joint_estimates(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """``tool_force = None``: each joint's own estimate drives, not the joints read together."""
+    return _build(robot, mode, tool_force=None)
+
+
 def no_weighting(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
     """``assist_knee = 0``: the whole residual drives, and the damping never rises."""
     return _build(robot, mode, assist_knee=0.0)

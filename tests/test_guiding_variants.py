@@ -16,7 +16,7 @@ import guiding_variants
 FACTORIES = ("no_weighting", "full_residual", "long_stroke", "long_stroke_trusted",
              "strong_dither", "tool_wrench_prior", "smooth_rate_guiding",
              "no_friction_margin", "half_friction_margin",
-             "three_quarter_friction_margin")  # fmt: skip
+             "three_quarter_friction_margin", "joint_estimates")  # fmt: skip
 
 
 @pytest.fixture(scope="module")

@@ -104,3 +104,25 @@ def test_no_kernel_compiles_inside_the_loop_after_the_warm_up():
                                  "MUJOCO_GL": "disable"}, timeout=300)  # fmt: skip
     assert result.returncode == 0, result.stderr[-2000:]
     assert "NEW {}" in result.stdout, result.stdout[-2000:]
+
+
+def test_a_compiled_kernel_replaces_its_wrapper_in_the_package():
+    """After its first call a kernel's module name is numba's dispatcher (no wrapper frame).
+
+    A name held elsewhere (the registry's) still calls through the wrapper, to the same
+    compiled code, and both keep the Python function as ``py_func``.
+    """
+    from leadthrough import compiled
+    from leadthrough.estimation import tool_force
+
+    wrapper = compiled._KERNELS["leadthrough.estimation.tool_force._fuse"]
+
+    jacobian, estimate = np.ones((6, 3)), np.array([1.0, 2.0, 3.0])
+    std, other, mean, fused_std = np.ones(3), np.ones(3), np.empty(3), np.empty(3)
+    wrapper(estimate, std, jacobian, other, 1e-4, mean, fused_std)
+    bound = tool_force._fuse
+    assert bound is not wrapper and type(bound).__module__.startswith("numba")
+    again, again_std = np.empty(3), np.empty(3)
+    bound(estimate, std, jacobian, other, 1e-4, again, again_std)
+    np.testing.assert_array_equal(again, mean)
+    assert bound.py_func is wrapper.py_func

@@ -99,6 +99,7 @@ class LeadThrough:
         if calibrate and parameters.calibration is None:
             raise ParameterError("calibrate", "True needs parameters.calibration (it is None)")
         self.parameters = parameters
+        self._gravity_std = parameters.gravity_std  # [–], a property: read once
         self.robot = robot
         self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
         friction = friction or FrictionModel.from_robot(robot)
@@ -178,10 +179,10 @@ class LeadThrough:
         model = self.model
         if model is None:
             return friction
-        reference = (
-            self._no_constraint if self._gravity_reference is None else self._gravity_reference
-        )
-        return _with_gravity_error(friction, model.gravity, reference, self.parameters.gravity_std)
+        reference = self._gravity_reference
+        if reference is None:
+            reference = self._no_constraint  # zeros
+        return _with_gravity_error(friction, model.gravity, reference, self._gravity_std)
 
     @property
     def tool_wrench(self) -> ToolWrench:

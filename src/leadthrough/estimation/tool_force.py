@@ -78,11 +78,11 @@ class ToolForceFusion:
         self.mean = np.zeros(friction.n_joints)
         self.std = np.zeros(friction.n_joints)
         self.updated = False
+        self._prior_precision = 1.0 / parameters.force_std**2
 
     def update(self, estimate: FloatArray, std: FloatArray, jacobian: FloatArray) -> FloatArray:
         """Fuse this period's estimates (see :func:`fuse`); returns :attr:`mean` [Nm]."""
-        fuse(estimate, std, jacobian, self.other_std, self.parameters.force_std, self.mean,
-             self.std)  # fmt: skip
+        _fuse(estimate, std, jacobian, self.other_std, self._prior_precision, self.mean, self.std)
         self.updated = True
         return self.mean
 
