@@ -44,7 +44,8 @@ def test_the_compiled_3x3_form_is_the_posterior_of_the_full_covariances():
         expected = fuse_reference(estimate, std, jacobian, other, 50.0)
         compiled = fuse(estimate, std, jacobian, other, 50.0, np.empty(7), np.empty(7))
         interpreted = np.empty(7), np.empty(7)
-        _fuse.py_func(estimate, std, jacobian, other, 1.0 / 50.0**2, *interpreted)
+        _fuse.py_func(estimate, std, jacobian, other, 1.0 / 50.0**2, *interpreted,
+                      np.zeros((3, 8)))  # fmt: skip
         for result in (compiled, interpreted):
             np.testing.assert_allclose(result[0], expected[0], rtol=1e-9, atol=1e-12)
             np.testing.assert_allclose(result[1], expected[1], rtol=1e-9, atol=1e-12)

@@ -181,7 +181,7 @@ class LeadThrough:
             return friction
         reference = self._gravity_reference
         if reference is None:
-            reference = self._no_constraint  # zeros
+            reference = self._no_gravity_reference
         return _with_gravity_error(friction, model.gravity, reference, self._gravity_std)
 
     @property
@@ -248,6 +248,7 @@ class LeadThrough:
         n = self.robot.n_joints
         self.law.reset()
         self._no_constraint = np.zeros(n)  # the constraint torque without constraints [Nm]
+        self._no_gravity_reference = np.zeros(n)  # G_cal without a calibration [Nm]
         self._sent = DelayLine((2, n), p.measurement_delay)  # (command, its dither) [Nm]
         self._own_clock = 0.0  # [s], for the positional form of step, which brings no time
         self._t = float("nan")

@@ -79,10 +79,12 @@ class ToolForceFusion:
         self.std = np.zeros(friction.n_joints)
         self.updated = False
         self._prior_precision = 1.0 / parameters.force_std**2
+        self._work = np.zeros((3, 8))  # the kernel's scratch space: no allocation per period
 
     def update(self, estimate: FloatArray, std: FloatArray, jacobian: FloatArray) -> FloatArray:
         """Fuse this period's estimates (see :func:`fuse`); returns :attr:`mean` [Nm]."""
-        _fuse(estimate, std, jacobian, self.other_std, self._prior_precision, self.mean, self.std)
+        _fuse(estimate, std, jacobian, self.other_std, self._prior_precision, self.mean,
+              self.std, self._work)  # fmt: skip
         self.updated = True
         return self.mean
 
@@ -123,24 +125,28 @@ def fuse(
         mean: Written: the posterior mean [Nm], (n,).
         fused_std: Written: the posterior std [Nm], (n,).
     """
-    _fuse(estimate, std, jacobian, other_std, 1.0 / force_std**2, mean, fused_std)
+    _fuse(estimate, std, jacobian, other_std, 1.0 / force_std**2, mean, fused_std,
+          np.zeros((3, 8)))  # fmt: skip
     return mean, fused_std
 
 
 @kernel
-def _fuse(estimate, std, jacobian, other_std, prior_precision, mean, fused_std):
+def _fuse(estimate, std, jacobian, other_std, prior_precision, mean, fused_std, work):
+    """:func:`fuse` in place, by the 3 × 3 form of the module docstring.
+
+    ``work`` (3, 8) is scratch space: A, A⁻¹, J_v D⁻¹ τ̂ and f̂ in columns 0–2, 3–5, 6, 7.
+    """
     n = estimate.shape[0]
-    a = np.zeros((3, 3))  # A = J_v D⁻¹ J_vᵀ + I / σ_f²
-    b = np.zeros(3)  # J_v D⁻¹ τ̂
+    work[:] = 0.0
+    a, inverse, b, force = work[:, 0:3], work[:, 3:6], work[:, 6], work[:, 7]
     for r in range(3):
-        a[r, r] = prior_precision
+        a[r, r] = prior_precision  # A = J_v D⁻¹ J_vᵀ + I / σ_f²
     for i in range(n):
         w = 1.0 / (std[i] * std[i] + other_std[i] * other_std[i])
         for r in range(3):
             b[r] += jacobian[r, i] * w * estimate[i]
             for c in range(3):
                 a[r, c] += jacobian[r, i] * w * jacobian[c, i]
-    inverse = np.empty((3, 3))  # of the symmetric A, by cofactors
     inverse[0, 0] = a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]
     inverse[1, 0] = a[1, 2] * a[2, 0] - a[1, 0] * a[2, 2]
     inverse[2, 0] = a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]
@@ -151,8 +157,7 @@ def _fuse(estimate, std, jacobian, other_std, prior_precision, mean, fused_std):
     inverse[1, 2] = a[0, 2] * a[1, 0] - a[0, 0] * a[1, 2]
     inverse[2, 2] = a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
     determinant = a[0, 0] * inverse[0, 0] + a[0, 1] * inverse[1, 0] + a[0, 2] * inverse[2, 0]
-    force = np.zeros(3)
-    for r in range(3):
+    for r in range(3):  # A⁻¹ by cofactors (A symmetric), then f̂ = A⁻¹ J_v D⁻¹ τ̂
         for c in range(3):
             inverse[r, c] /= determinant
         for c in range(3):
