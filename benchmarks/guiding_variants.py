@@ -191,3 +191,43 @@ def _scaled_margin(scale: float) -> Callable[[lt.RobotDescription, str], lt.Lead
 no_friction_margin = _scaled_margin(0.0)
 half_friction_margin = _scaled_margin(0.5)
 three_quarter_friction_margin = _scaled_margin(0.75)
+
+
+class _TrueTorqueLaw(ActiveLaw):
+    """The law fed the simulated operator torque instead of the estimate (an oracle)."""
+
+    truth: Callable[[], np.ndarray] | None = None
+
+    def operator_torque(self, estimate: Any, q: Any, qd: Any, gravity: Any) -> Any:
+        if self.truth is not None:
+            estimate = np.array(self.truth(), dtype=float)
+        return super().operator_torque(estimate, q, qd, gravity)
+
+
+class _TrueTorque(lt.LeadThrough):
+    """Guides on the twin's true operator torque (``guiding.run_case`` hands it the twin)."""
+
+    law_class = _TrueTorqueLaw
+
+    def observe_truth(self, twin: Any) -> None:
+        self.law.truth = lambda: twin.truth.tau_operator  # type: ignore[attr-defined]
+
+
+#: The issue's "plain smooth admittance": the whole estimate drives (no weight, no friction
+#: margin), the damping never rises; k_M = 2 and the PD as the defaults.
+PLAIN = {"assist_knee": 0.0, "stiction_margin": 0.0, "friction_uncertainty": 0.0}
+
+
+def true_torque(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """The defaults fed the twin's true operator torque: what the estimate costs."""
+    return _build(robot, mode, cls=_TrueTorque)
+
+
+def plain_admittance(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """:data:`PLAIN`, fed the estimate: what the released arm's guarantees cost."""
+    return _build(robot, mode, **PLAIN)
+
+
+def true_torque_plain(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """:data:`PLAIN`, fed the twin's true operator torque: the law's own floor."""
+    return _build(robot, mode, cls=_TrueTorque, **PLAIN)

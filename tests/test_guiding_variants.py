@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -16,7 +17,8 @@ import guiding_variants
 FACTORIES = ("no_weighting", "full_residual", "long_stroke", "long_stroke_trusted",
              "strong_dither", "tool_wrench_prior", "smooth_rate_guiding",
              "no_friction_margin", "half_friction_margin",
-             "three_quarter_friction_margin", "joint_estimates")  # fmt: skip
+             "three_quarter_friction_margin", "joint_estimates",
+             "plain_admittance")  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -60,14 +62,45 @@ def test_scaled_margin_is_that_share_of_the_default(robot, name, scale):
     np.testing.assert_allclose(variant, scale * default, rtol=1e-12, atol=1e-15)
 
 
-def _pushed(robot: lt.RobotDescription, controller: lt.LeadThrough) -> lt.LeadThrough:
-    """``controller`` (calibration skipped) after 200 periods of a 2 Nm push on joint 4."""
+@pytest.mark.parametrize("name", ("true_torque", "true_torque_plain"))
+def test_an_oracle_guides_on_the_truth_it_is_handed(robot, name):
+    """Handed a twin whose operator pushes joint 4, the oracle follows that push, not the motors."""
+    push = np.zeros(robot.n_joints)
+    push[3] = 2.0
+    twin = SimpleNamespace(truth=SimpleNamespace(tau_operator=push))
+    controller = getattr(guiding_variants, name)(robot, "active")
+    controller.observe_truth(twin)
+    controller = _pushed(robot, controller, measured_push=0.0)
+    assert controller.law.references.q_ref[3] - robot.home()[3] > 1e-4  # along the truth
+
+
+def test_guiding_hands_the_twin_to_an_oracle(robot):
+    """``guiding._run`` hands the simulated robot to a controller that asks for it."""
+    from leadthrough.experiments import guiding
+    from leadthrough.twin.simulator import DigitalTwin
+
+    seen = []
+
+    def factory(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+        controller = lt.LeadThrough(robot, mode=mode, dt=0.004)
+        controller.observe_truth = seen.append  # type: ignore[attr-defined]
+        return controller
+
+    guiding._run(robot, guiding.Case("dry", 1, "relaxed", "sideways"), "passive", factory,
+                 np.inf, 0.1)  # fmt: skip
+    assert len(seen) == 1 and isinstance(seen[0], DigitalTwin)
+
+
+def _pushed(
+    robot: lt.RobotDescription, controller: lt.LeadThrough, measured_push: float = 2.0
+) -> lt.LeadThrough:
+    """``controller`` (calibration skipped) after 200 periods of a push on joint 4 [Nm]."""
     controller.calibrate = False
     controller.reset()
     dynamics = lt.Dynamics(robot)
     q = np.array(robot.home(), dtype=float)
     push = np.zeros(robot.n_joints)
-    push[3] = 2.0  # far above any margin
+    push[3] = measured_push  # 2 Nm: far above any margin
     rng = np.random.default_rng(0)
     for _ in range(200):  # the arm held still, its encoders alive (a frozen one faults)
         noisy = q + rng.normal(0.0, 1e-6, q.size)

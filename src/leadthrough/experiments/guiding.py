@@ -12,7 +12,9 @@ calibrate=True)`` with the nominal description and friction, the start-up calibr
 included; the hand grabs once it is over. ``controller_factory(robot, mode)`` replaces it
 (any object with ``step(state)`` or ``step(q, qd, tau_measured)``; ``calibration_time``,
 ``tau_ext_hat`` and ``std`` are read when present), to compare control laws on the same
-cases.
+cases. For diagnosis only, a controller with ``observe_truth(twin)`` is handed the
+simulated robot before the grab (an oracle may then read the true operator torque, as
+``benchmarks/guiding_variants.py`` does to measure what the estimate costs).
 """
 
 from __future__ import annotations
@@ -206,6 +208,9 @@ def _run(
     recorder = _Recorder(factory(robot, mode))
     grab = float(getattr(recorder.controller, "calibration_time", CalibrationParameters().duration))
     twin = DigitalTwin(robot, plant.config)
+    observe_truth = getattr(recorder.controller, "observe_truth", None)
+    if observe_truth is not None:  # an oracle (diagnosis): reads the twin's truth
+        observe_truth(twin)
     before = simulate(twin, recorder, grab, progress=False)
     path = case_path(robot, case.path, twin.truth.flange_pose[:3, 3].copy())
     hand = Hand(path, stiffness=stiffness, damping=damping)
