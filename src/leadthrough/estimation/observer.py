@@ -42,6 +42,7 @@ from numpy.typing import ArrayLike
 
 from leadthrough.compiled import kernel
 from leadthrough.errors import ParameterError
+from leadthrough.estimation import smooth_rate
 from leadthrough.estimation.smooth_rate import SmoothRateFilter, consider_variance
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray
@@ -129,6 +130,47 @@ def stationary_filter(
     gain = prior[:, 0] / (prior[0, 0] + noise / dt)
     posterior_22 = prior[1, 1] - gain[1] * prior[0, 1]
     return gain, float(np.sqrt(posterior_22))
+
+
+def sliding_gains(parameters: ObserverParameters, friction_std: float, dt: float) -> FloatArray:
+    """Stationary Kalman gains of a sliding joint whose friction std is ``friction_std`` [Nm].
+
+    (K_p, K_τ) of the 2-state filters with Q_m = scale · std² (``"time_varying"``, and
+    ``"two_level"`` while moving); (K_p, K_τ, K_ṙ) of ``"smooth_rate"``, whose Q_m is
+    the friction noise, white (scale · std² dt).
+    """
+    scale = parameters.friction_noise_scale * friction_std**2
+    if parameters.variant == "smooth_rate":
+        return smooth_rate.stationary_filter(scale * dt, parameters.torque_rate_noise,
+                                             parameters.measurement_noise, dt)[0]  # fmt: skip
+    return stationary_filter(scale, parameters.torque_noise, parameters.measurement_noise, dt)[0]
+
+
+def estimate_noise_gain(parameters: ObserverParameters, friction_std: float, dt: float) -> float:
+    """Std of τ̂_ext per unit std of a white torque disturbance, one sample per period [–].
+
+    What the friction model's noise σ (a torque scattered independently from sample to
+    sample) becomes in the estimate of a sliding joint: the filter averages it over its
+    bandwidth, so it reads ``gain · σ`` (≈ 0.37 σ for the controller's observer at 4 ms).
+    Exact for the stationary filter: with the error ``e = x − x̂`` driven by a momentum
+    step ``d = dt · w`` (w the torque), ``e⁺ = (I − K H)(Φ e + [d, 0, …])``, and the
+    estimate's variance is the τ entry of the discrete Lyapunov solution.
+
+    Args:
+        parameters: The observer's tuning.
+        friction_std: The sliding joint's friction std [Nm] (it sets the gains).
+        dt: Period [s].
+    """
+    from scipy.linalg import solve_discrete_lyapunov  # at call time: keeps the import fast
+
+    gains = sliding_gains(parameters, friction_std, dt)
+    size = gains.size
+    transition = (smooth_rate.transition(dt) if size == 3
+                  else np.array([[1.0, dt], [0.0, 1.0]]))  # fmt: skip
+    update = np.eye(size) - np.outer(gains, np.eye(size)[0])  # I − K H, H = [1, 0, …]
+    step = update[:, :1] * dt  # a unit torque sample's momentum step, after the update
+    variance = solve_discrete_lyapunov(update @ transition, step @ step.T)
+    return float(np.sqrt(variance[1, 1]))
 
 
 class MomentumObserver:

@@ -97,9 +97,9 @@ class CaseResult:
         max_joint_speed: Largest true joint speed of both runs (a runaway check) [rad/s].
         observer_rms: RMS error of τ̂_ext vs the operator torque while moving, over the
             joint's peak operator torque, mean over joints [–] (NaN if not readable).
-        observer_rms_moving: The same RMS error over the samples where the joint itself
-            moves [–]: what the observer can see (where a joint stands still, stiction
-            may hold any push below breakaway unseen).
+        observer_rms_moving: The RMS error relative to each joint's peak, pooled over the
+            samples where a joint itself moves [–]: what the observer can see (where a
+            joint stands still, stiction may hold any push below breakaway unseen).
         observer_coverage: Share of moving samples within ±2 std [–].
         observer_std: Median std over the joint's peak operator torque, mean over joints [–].
         calibrated: Whether the controller's start-up calibration succeeded in the hold run
@@ -341,12 +341,11 @@ def _observer_figures(
     relative_std = std[:, used] / peak[used]
     coverage = np.mean((np.abs(error) <= 2.0 * std[:, used])[joint_moving])
     spread = np.median(relative_std[joint_moving])
-    squared = np.where(joint_moving, error**2, 0.0).sum(axis=0)
-    counts = joint_moving.sum(axis=0)
-    seen = counts > 0  # the RMS over each joint's own moving samples, mean over joints
-    rms_moving = np.sqrt(squared[seen] / counts[seen]) / peak[used][seen]
+    # pooled over every (joint, sample) where the joint moves, each error relative to its
+    # joint's peak: a wrist that twitches for 5 samples weighs 5 samples, not a whole joint
+    rms_moving = np.sqrt(np.mean((error / peak[used])[joint_moving] ** 2))
     return _ObserverFigures(float(rms.mean()), float(coverage), float(spread),
-                            float(rms_moving.mean()))  # fmt: skip
+                            float(rms_moving))  # fmt: skip
 
 
 #: The goals of issue 13: (figure, worst end, goal text, check on (median, worst)).

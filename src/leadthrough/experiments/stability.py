@@ -33,8 +33,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from leadthrough.control.parameters import LeadThroughParameters
-from leadthrough.estimation import smooth_rate
-from leadthrough.estimation.observer import ObserverParameters, stationary_filter
+from leadthrough.estimation.observer import sliding_gains
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
@@ -132,20 +131,10 @@ def joint_loops(
     observer = parameters.observer
     loops = []
     for i in range(robot.n_joints):
-        gains = _observer_gains(observer, float(friction_std[i]), dt)
+        gains = sliding_gains(observer, float(friction_std[i]), dt)
         hand = (hand_stiffness * lever2[i], hand_damping * lever2[i])
         loops.append(JointLoop(float(inertia[i]), *hand, tuple(float(g) for g in gains)))
     return loops
-
-
-def _observer_gains(observer: ObserverParameters, friction_std: float, dt: float) -> FloatArray:
-    """Stationary gains of a joint whose friction std is ``friction_std`` [Nm] (moving)."""
-    if observer.variant == "smooth_rate":  # its Q_m: the friction noise, white (σ² dt)
-        noise = observer.friction_noise_scale * friction_std**2 * dt
-        return smooth_rate.stationary_filter(noise, observer.torque_rate_noise,
-                                             observer.measurement_noise, dt)[0]  # fmt: skip
-    return stationary_filter(friction_std**2, observer.torque_noise,
-                             observer.measurement_noise, dt)[0]  # fmt: skip
 
 
 def worst_damping(
