@@ -226,8 +226,9 @@ class ActiveLaw:
 
         The weight compares the residual with what the model may still read without an
         operator: the gravity error (:class:`ModelErrorBias`), the stiction no sigmoid
-        describes, the friction noise, and the Coulomb uncertainty of the friction model
-        (≈ τ_C at rest, where friction may hold any push of that size unseen, → 0 moving).
+        describes, the friction noise as it reaches the estimate (:meth:`_estimate_noise`),
+        and the Coulomb uncertainty of the friction model (≈ τ_C at rest, where friction may
+        hold any push of that size unseen, → 0 moving).
         """
         p = self.parameters
         plausible = self._friction_tolerance + p.gravity_uncertainty * np.abs(gravity)
