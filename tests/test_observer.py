@@ -467,3 +467,12 @@ def test_a_faster_observer_passes_more_noise():
     gains = [estimate_noise_gain(ObserverParameters(torque_noise=q), 0.05, DT)
              for q in (10.0, 100.0, 1000.0)]  # fmt: skip
     assert gains[0] < gains[1] < gains[2]
+
+
+def test_noise_gain_is_solved_once_per_noise_level():
+    """The controller's rebuild at the calibration's end (inside a period) solves nothing."""
+    robot = lt.robots.yumi()
+    controller = lt.LeadThrough(robot, mode="active", dt=DT)
+    misses = estimate_noise_gain.cache_info().misses
+    controller.law.use_friction(controller.friction)  # as after the calibration
+    assert estimate_noise_gain.cache_info().misses == misses
