@@ -14,14 +14,11 @@ from scipy.linalg import expm
 
 import leadthrough as lt
 from leadthrough.errors import ParameterError
-from leadthrough.estimation import smooth_rate
 from leadthrough.estimation.classical import ClassicalMomentumObserver
 from leadthrough.estimation.observer import (
     MomentumObserver,
     ObserverParameters,
-    estimate_noise_gain,
     process_noise,
-    sliding_gains,
     stationary_filter,
 )
 from leadthrough.friction.model import FrictionModel
@@ -435,44 +432,3 @@ def test_classical_invalid_gain_raises(dynamics, friction):
     """A non-positive K_O raises ParameterError."""
     with pytest.raises(ParameterError):
         ClassicalMomentumObserver(dynamics, friction, dt=DT, gain=0.0)
-
-
-@pytest.mark.parametrize("variant", ["time_varying", "smooth_rate"])
-def test_estimate_noise_gain_is_the_std_of_the_filtered_noise(variant):
-    """A white torque noise of std σ, run through the filter, reads gain · σ in τ̂.
-
-    Monte Carlo of the stationary filter (predict, correct on the momentum) against the
-    Lyapunov solution; the filter averages: the gain is well below 1.
-    """
-    parameters = ObserverParameters(torque_noise=100.0, variant=variant)
-    sigma, samples = 0.05, 60_000
-    gains = sliding_gains(parameters, sigma, DT)
-    transition = (smooth_rate.transition(DT) if gains.size == 3
-                  else np.array([[1.0, DT], [0.0, 1.0]]))  # fmt: skip
-    rng = np.random.default_rng(3)
-    momentum, state, estimates = 0.0, np.zeros(gains.size), np.empty(samples)
-    for k, torque in enumerate(rng.normal(0.0, sigma, samples)):
-        momentum += DT * torque
-        state = transition @ state
-        state = state + gains * (momentum - state[0])
-        estimates[k] = state[1]
-    measured = estimates[1000:].std() / sigma
-    gain = estimate_noise_gain(parameters, sigma, DT)
-    assert gain == pytest.approx(measured, rel=0.03)
-    assert 0.2 < gain < 0.6
-
-
-def test_a_faster_observer_passes_more_noise():
-    """More torque noise Q_τ: a faster filter, a larger share of the noise in τ̂."""
-    gains = [estimate_noise_gain(ObserverParameters(torque_noise=q), 0.05, DT)
-             for q in (10.0, 100.0, 1000.0)]  # fmt: skip
-    assert gains[0] < gains[1] < gains[2]
-
-
-def test_noise_gain_is_solved_once_per_noise_level():
-    """The controller's rebuild at the calibration's end (inside a period) solves nothing."""
-    robot = lt.robots.yumi()
-    controller = lt.LeadThrough(robot, mode="active", dt=DT)
-    misses = estimate_noise_gain.cache_info().misses
-    controller.law.use_friction(controller.friction)  # as after the calibration
-    assert estimate_noise_gain.cache_info().misses == misses

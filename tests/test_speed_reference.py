@@ -11,9 +11,7 @@ damping weighed on the push that sustains a motion (``admittance.damping_weight`
 the position reference of a resting joint nobody pushes drawn to where it is
 (``admittance.settled_reference``), then the references braking to their bounds
 (``admittance.braking_cap``) and the joints' estimates read together as a force at the
-tool (``estimation.tool_force``), then the operator weight's rest tolerance counting the
-friction noise as it reaches the estimate (``ActiveLaw._estimate_noise``). A faster step
-must reproduce them.
+tool (``estimation.tool_force``). A faster step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

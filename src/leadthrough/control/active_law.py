@@ -41,7 +41,6 @@ from leadthrough.control.admittance import (
 from leadthrough.control.bias import ModelErrorBias
 from leadthrough.control.fused import admittance_law, operator_drive, sliding_velocity
 from leadthrough.control.parameters import LeadThroughParameters
-from leadthrough.estimation.observer import estimate_noise_gain
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
 
@@ -117,26 +116,10 @@ class ActiveLaw:
         self._viscous_relative = np.maximum(self.nominal_friction.relative_error,
                                             p.stiction_margin)  # fmt: skip
         self._friction_tolerance = relative * friction.coulomb + 2.0 * friction.noise_std
-        self._rest_tolerance = p.stiction_margin * friction.coulomb + 2.0 * self._estimate_noise(
-            friction
-        )
+        self._rest_tolerance = p.stiction_margin * friction.coulomb + 2.0 * friction.noise_std
         self._joint_constants = np.array([self._friction_tolerance, self._reference_low,
             self._reference_high, relative, self._viscous_relative, self._rest_tolerance,
             self._speed_cap])  # fused.JOINT_ROWS  # fmt: skip
-
-    def _estimate_noise(self, friction: FrictionModel) -> FloatArray:
-        """Std of the friction noise as it reaches a sliding joint's estimate [Nm].
-
-        The model's σ scatters a torque sample by sample; the observer averages it over
-        its bandwidth, so the estimate reads ≈ 0.37 σ of it
-        (:func:`~leadthrough.estimation.observer.estimate_noise_gain`). The weight
-        compares the estimate, not a raw sample, with the model's uncertainty: counting
-        the raw 2 σ there cost 0.05 of effort on the guiding benchmark, and the released
-        arms stop as well without it.
-        """
-        observer, dt = self.parameters.observer, self.dt
-        gains = [estimate_noise_gain(observer, float(std), dt) for std in friction.noise_std]
-        return np.asarray(gains) * friction.noise_std
 
     def reset(self) -> None:
         """Forget the bias, the weights and the references."""
@@ -226,9 +209,8 @@ class ActiveLaw:
 
         The weight compares the residual with what the model may still read without an
         operator: the gravity error (:class:`ModelErrorBias`), the stiction no sigmoid
-        describes, the friction noise as it reaches the estimate (:meth:`_estimate_noise`),
-        and the Coulomb uncertainty of the friction model (≈ τ_C at rest, where friction may
-        hold any push of that size unseen, → 0 moving).
+        describes, the friction noise, and the Coulomb uncertainty of the friction model
+        (≈ τ_C at rest, where friction may hold any push of that size unseen, → 0 moving).
         """
         p = self.parameters
         plausible = self._friction_tolerance + p.gravity_uncertainty * np.abs(gravity)

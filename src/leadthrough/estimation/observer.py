@@ -33,7 +33,6 @@ covariance: the observer reports its own uncertainty.
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 from typing import Literal
@@ -145,37 +144,6 @@ def sliding_gains(parameters: ObserverParameters, friction_std: float, dt: float
         return smooth_rate.stationary_filter(scale * dt, parameters.torque_rate_noise,
                                              parameters.measurement_noise, dt)[0]  # fmt: skip
     return stationary_filter(scale, parameters.torque_noise, parameters.measurement_noise, dt)[0]
-
-
-@functools.lru_cache(maxsize=256)
-def estimate_noise_gain(parameters: ObserverParameters, friction_std: float, dt: float) -> float:
-    """Std of τ̂_ext per unit std of a white torque disturbance, one sample per period [–].
-
-    What the friction model's noise σ (a torque scattered independently from sample to
-    sample) becomes in the estimate of a sliding joint: the filter averages it over its
-    bandwidth, so it reads ``gain · σ`` (≈ 0.37 σ for the controller's observer at 4 ms).
-    Exact for the stationary filter: with the error ``e = x − x̂`` driven by a momentum
-    step ``d = dt · w`` (w the torque), ``e⁺ = (I − K H)(Φ e + [d, 0, …])``, and the
-    estimate's variance is the τ entry of the discrete Lyapunov solution.
-
-    Cached (a Riccati and a Lyapunov solve, ~0.5 ms): the controller asks again, for the
-    same noise, when its start-up calibration ends inside a control period.
-
-    Args:
-        parameters: The observer's tuning.
-        friction_std: The sliding joint's friction std [Nm] (it sets the gains).
-        dt: Period [s].
-    """
-    from scipy.linalg import solve_discrete_lyapunov  # at call time: keeps the import fast
-
-    gains = sliding_gains(parameters, friction_std, dt)
-    size = gains.size
-    transition = (smooth_rate.transition(dt) if size == 3
-                  else np.array([[1.0, dt], [0.0, 1.0]]))  # fmt: skip
-    update = np.eye(size) - np.outer(gains, np.eye(size)[0])  # I − K H, H = [1, 0, …]
-    step = update[:, :1] * dt  # a unit torque sample's momentum step, after the update
-    variance = solve_discrete_lyapunov(update @ transition, step @ step.T)
-    return float(np.sqrt(variance[1, 1]))
 
 
 class MomentumObserver:
