@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from leadthrough.control.calibration import CalibrationParameters
+from leadthrough.control.calibration import CalibrationParameters, implausible_friction
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.control.parameters import LeadThroughParameters
 from leadthrough.safety.supervisor import SupervisorState
@@ -14,6 +14,7 @@ from leadthrough.twin.mjcf import Payload
 from leadthrough.twin.model_error import ModelError
 from leadthrough.twin.operator import Hand
 from leadthrough.twin.paths import MinimumJerk
+from leadthrough.twin.plants import sample_plant
 from leadthrough.twin.runner import simulate
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig
 
@@ -61,6 +62,28 @@ def test_unknown_payload_is_found_and_held(yumi):
     blind = LeadThrough(yumi)
     sagging = simulate(DigitalTwin(yumi, config), blind, 6.0)
     assert np.max(np.abs(sagging.q_true[-1] - sagging.q_true[0])) > 0.05
+
+
+def test_friction_far_above_the_model_is_measured_not_refused(yumi):
+    """A sampled plant whose joint 3 reads 1.6× the model (level, position, drive gain).
+
+    Measured and accepted: refused (as with a ±50 % band), the arm was guided
+    uncalibrated, and released on the guiding benchmark it ran away 112 mrad.
+    """
+    plant = sample_plant(yumi, 11, "dry")
+    controller = LeadThrough(yumi, calibrate=True)
+    simulate(DigitalTwin(yumi, plant.config), controller, 1.2)
+    result = controller.calibration
+    assert result.accepted, result.reason
+    assert result.friction_scale[2] > 1.5
+    assert not implausible_friction(result.friction_scale, 0.75).any()
+
+
+def test_the_plausible_friction_band_is_symmetric_in_the_ratio():
+    """1 + c above the model and 1 / (1 + c) below it are the edges; a pushing friction never."""
+    scale = np.array([1.74, 1.76, 1.0 / 1.74, 1.0 / 1.76, 0.42, 1.0, 0.0, -0.2])
+    flagged = implausible_friction(scale, 0.75)
+    np.testing.assert_array_equal(flagged, [False, True, False, True, True, False, True, True])
 
 
 def test_touching_the_arm_during_calibration_refuses_it_and_never_faults(yumi):
