@@ -67,6 +67,19 @@ def print_summary(stats: dict[str, dict[str, float]], old: dict | None) -> None:
         print(f"{name:<14}{s['median']:>9.3g}{s['worst']:>9.3g}  {goal:<38}{met:>4}{before}")
 
 
+def uncalibrated_line(results: dict[str, dict[str, float]]) -> str:
+    """How many cases the active controller guided without a (accepted) calibration.
+
+    A refused calibration shows in one column of one row only; counted here, a plant family
+    that the calibration refuses (seeds 9–12 did, 14 of 56 cases) cannot hide in the table.
+    """
+    missing = [name for name, f in results.items() if not f["calibrated"]]
+    listed = ", ".join(missing[:3]) + (", …" if len(missing) > 3 else "")
+    return f"guided without a calibration: {len(missing)} of {len(results)} cases" + (
+        f" ({listed})" if missing else ""
+    )
+
+
 def parse_seeds(text: str) -> list[int]:
     """``"5-8"`` → [5, 6, 7, 8]; ``"5,9"`` → [5, 9]."""
     seeds: list[int] = []
@@ -122,6 +135,7 @@ def main(argv: list[str] | None = None) -> None:
         with open(args.compare) as handle:
             old = json.load(handle)["summary"]
     print_summary(stats, old)
+    print(uncalibrated_line(results))
     if args.save:
         with open(args.save, "w") as handle:
             json.dump({"cases": results, "summary": stats}, handle, indent=1)

@@ -1,0 +1,24 @@
+"""The guiding benchmark's command-line helpers (benchmarks/guiding_quality.py)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+import guiding_quality
+
+
+def test_seed_ranges_and_lists():
+    """``5-8`` is a range, ``5,9`` a list, and both mix."""
+    assert guiding_quality.parse_seeds("5-8") == [5, 6, 7, 8]
+    assert guiding_quality.parse_seeds("5,9-10") == [5, 9, 10]
+
+
+def test_cases_guided_without_a_calibration_are_counted_and_named():
+    """A refused calibration is counted below the table, not only marked in its row."""
+    results = {"dry#9 relaxed sideways": {"calibrated": 0.0},
+               "dry#10 relaxed sideways": {"calibrated": 1.0}}  # fmt: skip
+    line = guiding_quality.uncalibrated_line(results)
+    assert line == "guided without a calibration: 1 of 2 cases (dry#9 relaxed sideways)"
+    assert guiding_quality.uncalibrated_line({"x": {"calibrated": 1.0}}).endswith(": 0 of 1 cases")
