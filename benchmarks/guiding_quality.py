@@ -68,7 +68,7 @@ def print_summary(stats: dict[str, dict[str, float]], old: dict | None) -> None:
 
 
 def uncalibrated_line(results: dict[str, dict[str, float]]) -> str:
-    """How many cases the active controller guided without a (accepted) calibration.
+    """How many cases the active controller guided without an accepted calibration.
 
     A refused calibration shows in one column of one row only; counted here, a plant family
     that the calibration refuses (seeds 9–12 did, 14 of 56 cases) cannot hide in the table.

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 import guiding_variants
+from guiding_quality import parse_seeds
 from leadthrough.experiments.guiding import evaluate
 from leadthrough.model import robots
 
@@ -88,13 +89,12 @@ def main() -> None:
         choices=("full", "quick"),
         help="quick: 4 cases, to check the script (< 2 min)",
     )
-    parser.add_argument("--seeds", default="1-4", help="plant seeds, e.g. 1-4 or 5-8")
+    parser.add_argument("--seeds", default="1-4", help="plant seeds, e.g. 1-4, 5-8 or 5,9-10")
     parser.add_argument("--out", default="margin_runs", help="folder of the per-margin JSONs")
     parser.add_argument("--reuse", action="store_true", help="load the JSONs already in --out")
     parser.add_argument("--figure", default="docs/bench/margin_tradeoff.png")
     args = parser.parse_args()
-    low, _, high = args.seeds.partition("-")
-    seeds = list(range(int(low), int(high or low) + 1))
+    seeds = parse_seeds(args.seeds)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     rows = [(fraction, run(fraction, name, args.cases, seeds, out, args.reuse))
