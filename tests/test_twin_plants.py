@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import dataclasses
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 import leadthrough as lt
-from leadthrough.experiments.guiding import Case, run_case, tool_vibration
+from leadthrough.experiments.guiding import Case, release_figures, run_case, tool_vibration
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.twin.dry_friction import DryFrictionParameters
 from leadthrough.twin.operator import TorqueProfile, step
@@ -128,6 +129,28 @@ def test_vibration_keeps_what_is_above_4_hz():
     slow = 0.1 * np.sin(2 * np.pi * 0.5 * t) * np.array([[0.0, 1.0, 0.0]])
     assert tool_vibration(fast, dt) == pytest.approx(0.01 / np.sqrt(2.0), rel=0.03)
     assert tool_vibration(slow, dt) < 0.02 * 0.1
+
+
+def test_stop_time_counts_motion_not_the_dither_twitch():
+    """A joint that rocks at 15 Hz (±0.012 rad/s, ±0.2 mrad) once it stopped has stopped.
+
+    The same joint still coasting at 0.02 rad/s for 1 s after the release has not, and
+    its drift is its travel from 0.5 s after the release on (10 mrad).
+    """
+    dt, release = 0.004, 1.0
+    t = np.arange(0.0, 6.0, dt)
+    braking = np.clip(0.1 * (release + 0.1 - t) / 0.1, 0.0, 0.1)  # stops 0.1 s after
+    twitch = 0.012 * np.sign(np.sin(2 * np.pi * 15.0 * t)) * (t > release + 0.2)
+    coasting = 0.02 * ((t > release) & (t < release + 1.0))
+
+    def figures(qd):
+        sim = SimpleNamespace(t=t, qd_true=qd[:, None], q_true=np.cumsum(qd)[:, None] * dt)
+        return release_figures(sim, release)
+
+    stop_time, drift = figures(braking + twitch)
+    assert stop_time == pytest.approx(0.1, abs=0.06) and drift < 1e-3
+    stop_time, drift = figures(braking + coasting)
+    assert stop_time == pytest.approx(1.0, abs=0.06) and drift == pytest.approx(0.01, abs=1e-3)
 
 
 def test_benchmark_seeds_and_uncalibrated_factory(robot):

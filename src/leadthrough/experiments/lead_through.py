@@ -18,6 +18,7 @@ from leadthrough.control.calibration import Calibration, CalibrationParameters
 from leadthrough.control.feedforward import GravityCompensation
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.control.parameters import LeadThroughParameters
+from leadthrough.experiments.guiding import release_figures
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
@@ -227,7 +228,8 @@ class ReleaseResult:
     Attributes:
         simulation: Signals of the run.
         release: When the hand let go [s].
-        stop_time: From the release until every joint is slower than 0.01 rad/s for good [s].
+        stop_time: From the release until every joint is slower than 0.01 rad/s for good,
+            vibration above 4 Hz aside (:func:`~.guiding.release_figures`) [s].
         drift: Largest joint motion from 0.5 s after the release to the end [rad].
     """
 
@@ -251,12 +253,7 @@ def release_and_stay(
     controller = _controller(robot, mode, friction, parameters)
     sim = _guided(robot, config, chosen.operator, chosen.q0, controller, release + 0.5 + rest,
                   release)  # fmt: skip
-    after = sim.t >= release
-    moving = np.flatnonzero(after & np.any(np.abs(sim.qd_true) > 0.01, axis=1))
-    stop_time = float(sim.t[moving[-1]] - release) if moving.size else 0.0
-    settled = sim.t >= release + 0.5
-    drift = float(np.max(np.abs(sim.q_true[settled] - sim.q_true[settled][0])))
-    return ReleaseResult(sim, release, stop_time, drift)
+    return ReleaseResult(sim, release, *release_figures(sim, release))
 
 
 @dataclass(frozen=True, eq=False)
