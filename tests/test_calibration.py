@@ -9,6 +9,7 @@ import leadthrough as lt
 from leadthrough.control.calibration import CalibrationParameters, implausible_friction
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.control.parameters import LeadThroughParameters
+from leadthrough.friction.model import FrictionModel
 from leadthrough.safety.supervisor import SupervisorState
 from leadthrough.twin.mjcf import Payload
 from leadthrough.twin.model_error import ModelError
@@ -77,6 +78,31 @@ def test_friction_far_above_the_model_is_measured_not_refused(yumi):
     assert result.accepted, result.reason
     assert result.friction_scale[2] > 1.5
     assert not implausible_friction(result.friction_scale, 0.75).any()
+
+
+def test_a_level_nothing_measured_carries_the_unit_spread(yumi):
+    """Uncalibrated every joint's friction error is ≥ 0.35; calibrated, a measured one's 0.2.
+
+    A joint the calibration could not slide keeps 0.35; the Coulomb compensation's ceiling
+    uses the same errors; ``unmeasured_friction_error = 0`` trusts the model's own, and a
+    model given to the controller (identified on this arm) keeps its own.
+    """
+    plant = sample_plant(yumi, 1, "dry")  # stiction holds joint 3 in its calibration
+    controller = LeadThrough(yumi, calibrate=True)
+    np.testing.assert_allclose(controller.law.friction_error, 0.35)
+    simulate(DigitalTwin(yumi, plant.config), controller, 1.2)
+    measured = controller.calibration.measured
+    assert controller.calibration.accepted and not measured.all() and measured.any()
+    np.testing.assert_allclose(controller.law.friction_error, np.where(measured, 0.2, 0.35))
+    np.testing.assert_array_equal(
+        controller.feed_forward.friction_error, controller.law.friction_error
+    )
+    controller.set_payload(0.1)  # a new model, the same knowledge of the friction
+    np.testing.assert_allclose(controller.law.friction_error, np.where(measured, 0.2, 0.35))
+    trusting = LeadThroughParameters(unmeasured_friction_error=0.0)
+    np.testing.assert_allclose(LeadThrough(yumi, parameters=trusting).law.friction_error, 0.2)
+    identified = dataclasses.replace(FrictionModel.from_robot(yumi), relative_error=np.full(7, 0.1))
+    np.testing.assert_allclose(LeadThrough(yumi, friction=identified).law.friction_error, 0.1)
 
 
 def test_the_plausible_friction_band_is_symmetric_in_the_ratio():

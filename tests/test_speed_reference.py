@@ -11,7 +11,9 @@ damping weighed on the push that sustains a motion (``admittance.damping_weight`
 the position reference of a resting joint nobody pushes drawn to where it is
 (``admittance.settled_reference``), then the references braking to their bounds
 (``admittance.braking_cap``) and the joints' estimates read together as a force at the
-tool (``estimation.tool_force``). A faster step must reproduce them.
+tool (``estimation.tool_force``), then a friction level nothing measured on this arm
+taken as known to the spread of units only (``unmeasured_friction_error``). A faster step
+must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

@@ -54,8 +54,8 @@ class ActiveLaw:
         robot: The arm (joint limits, speed limits).
         parameters: The controller's settings.
         dt: Control period [s].
-        nominal_friction: The friction model before any calibration (its relative errors
-            bound the viscous part of the friction margin).
+        nominal_friction: The friction model before any calibration (nothing of it
+            measured on this arm).
 
     Attributes:
         friction_error: Relative error of the friction levels in use, per joint [–] (the
@@ -105,16 +105,26 @@ class ActiveLaw:
         self.use_friction(nominal_friction)
         self.reset()
 
-    def use_friction(self, friction: FrictionModel) -> None:
-        """The per-joint margins and tolerances for ``friction`` (nominal or calibrated)."""
+    def use_friction(self, friction: FrictionModel, measured: BoolArray | None = None) -> None:
+        """The per-joint margins and tolerances for ``friction`` (nominal or calibrated).
+
+        Args:
+            friction: The friction model in use.
+            measured: The joints whose Coulomb level was measured on this arm (the
+                start-up calibration's); None: none. The others' error is at least
+                ``unmeasured_friction_error`` (unless ``friction_uncertainty`` says).
+        """
         p = self.parameters
         self.friction = friction
-        relative = (friction.relative_error if p.friction_uncertainty is None
-                    else np.full(self.n, p.friction_uncertainty))  # fmt: skip
+        if p.friction_uncertainty is None:
+            unmeasured = np.maximum(friction.relative_error, p.unmeasured_friction_error)
+            relative = (unmeasured if measured is None
+                        else np.where(measured, friction.relative_error, unmeasured))  # fmt: skip
+        else:
+            relative = np.full(self.n, p.friction_uncertainty)
         relative = np.maximum(relative, p.stiction_margin)
         self.friction_error = relative
-        self._viscous_relative = np.maximum(self.nominal_friction.relative_error,
-                                            p.stiction_margin)  # fmt: skip
+        self._viscous_relative = relative
         self._friction_tolerance = relative * friction.coulomb + 2.0 * friction.noise_std
         self._rest_tolerance = p.stiction_margin * friction.coulomb + 2.0 * friction.noise_std
         self._joint_constants = np.array([self._friction_tolerance, self._reference_low,
@@ -230,8 +240,9 @@ class ActiveLaw:
 
         Removed from the estimate, it makes any friction error read as friction (against
         the motion), never as a push along it: a released arm cannot run away on a model
-        whose friction is too high. Coulomb part with the (calibrated) level's relative
-        error, viscous part with the nominal model's (the calibration does not see it).
+        whose friction is too high. Coulomb and viscous parts with the joint's
+        :attr:`friction_error` (a measured level's, or the spread of units where nothing
+        was measured).
         """
         viscous = self.friction.viscous * qd
         coulomb = self.friction.mean(qd, q) - viscous

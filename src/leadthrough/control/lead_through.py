@@ -31,7 +31,7 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from leadthrough.compiled import kernel
 from leadthrough.control.active_law import ActiveLaw
@@ -67,7 +67,10 @@ class LeadThrough:
             :attr:`tool_wrench` act).
         mode: ``"passive"`` or ``"active"`` (overrides ``parameters.mode``).
         dt: Control period [s]; must be the robot's (``control_loop`` checks it).
-        friction: Friction model (e.g. an identified one); default the description's.
+        friction: Friction model identified on this arm (``leadthrough identify``): its own
+            ``relative_error`` stands on every joint. Default the description's, the robot
+            type's model: a joint's level that the start-up calibration did not measure is
+            then known to ``parameters.unmeasured_friction_error`` only.
         parameters: All other settings, validated against ``robot`` here.
         constraints: Virtual constraints on the tool.
         calibrate: Run the start-up calibration (``parameters.calibration``) first: the
@@ -102,6 +105,8 @@ class LeadThrough:
         self._gravity_std = parameters.gravity_std  # [–], a property: read once
         self.robot = robot
         self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
+        #: which joints' friction levels were measured on this arm: all of a given model's
+        self._identified = np.full(robot.n_joints, friction is not None)
         friction = friction or FrictionModel.from_robot(robot)
         if friction.n_joints != robot.n_joints:
             raise ParameterError("friction", f"has {friction.n_joints} joints, the robot "
@@ -117,13 +122,23 @@ class LeadThrough:
         self.law = self.law_class(robot, parameters, self.dt, friction)
         self.reset()
 
-    def _build(self, robot: RobotDescription, friction: FrictionModel) -> None:
-        """The model-based parts, for the model of ``robot`` (and a payload) and ``friction``."""
+    def _build(
+        self,
+        robot: RobotDescription,
+        friction: FrictionModel,
+        measured: NDArray[np.bool_] | None = None,
+    ) -> None:  # fmt: skip
+        """The model-based parts, for the model of ``robot`` (and a payload) and ``friction``.
+
+        ``measured``: the joints whose friction level was measured on this arm (None: those
+        of the friction model the controller was given, all or none).
+        """
+        measured = self._identified if measured is None else measured
         p = self.parameters
         self.dynamics = Dynamics(robot)
         self.supervisor.use_model(self.dynamics)  # one model: robot and dynamics agree
-        self.friction = friction
-        self.law.use_friction(friction)
+        self.friction, self._friction_measured = friction, measured
+        self.law.use_friction(friction, measured)
         self.feed_forward = PassiveFeedForward(self.dynamics, friction, self.dt, p.compensation,
             p.dither, measurement_delay=None, friction_error=self.law.friction_error,
             gravity_uncertainty=p.gravity_uncertainty)  # fmt: skip
@@ -274,7 +289,7 @@ class LeadThrough:
             mass: Payload mass [kg], >= 0.
             com: Its centre of mass in the flange frame [m].
         """
-        self._build(self.robot.with_payload(mass, com), self.friction)
+        self._build(self.robot.with_payload(mass, com), self.friction, self._friction_measured)
 
     def warm_up(self) -> float:
         """Compile every kernel the step will call, on replicas of this controller.
@@ -290,8 +305,9 @@ class LeadThrough:
 
     def _replica(self, calibrate: bool) -> LeadThrough:
         """A new controller built from this one's robot, friction, parameters, constraints."""
-        return LeadThrough(self.robot, self.mode, self.dt, self.nominal_friction,
-                           self.parameters, self.constraints, calibrate)  # fmt: skip
+        friction = self.nominal_friction if self._identified.all() else None
+        return LeadThrough(self.robot, self.mode, self.dt, friction, self.parameters,
+                           self.constraints, calibrate)  # fmt: skip
 
     # --- the control step --------------------------------------------------------------
 
@@ -384,15 +400,19 @@ class LeadThrough:
             return
         robot = calibration.robot(self.robot)
         accuracy = self.parameters.calibration.friction_accuracy  # type: ignore[union-attr]
-        self._build(robot, calibration.friction(self.nominal_friction, accuracy))
+        # the joints that slid: their friction level and gravity were measured; a joint
+        # that stiction held was not, so its level and all of its G may be off
+        n = self.robot.n_joints
+        slid = np.ones(n, bool) if calibration.measured is None else calibration.measured
+        measured = slid | self._identified
+        self._build(robot, calibration.friction(self.nominal_friction, accuracy), measured)
         # the gravity error measured at the pose goes into the model, as the payload does:
         # feed-forward, observer and supervisor all hold the arm with G(q) − bias
         self._gravity_correction = -np.asarray(calibration.bias, dtype=float)
-        # where the gravity is known: at the pose on the joints that slid; a joint that
-        # stiction held was not measured, so all of its G may be off (reference 0)
+        # where the gravity is known: at the pose on the joints that slid (reference 0
+        # elsewhere)
         measured_gravity = self.dynamics.gravity(calibration.pose) - calibration.bias
-        measured = True if calibration.measured is None else calibration.measured
-        self._gravity_reference = np.where(measured, measured_gravity, 0.0)
+        self._gravity_reference = np.where(slid, measured_gravity, 0.0)
         self.law.model_error.calibrate(np.zeros(self.robot.n_joints), self._gravity_reference)
 
     def _control(

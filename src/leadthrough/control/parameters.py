@@ -109,6 +109,14 @@ class LeadThroughParameters:
             friction model's own (``FrictionModel.relative_error``). That much of the
             modelled friction is taken off the estimate along the motion, so that a model
             whose friction is too high reads friction, never a push (no runaway).
+        unmeasured_friction_error: Relative error of a Coulomb level that nothing measured
+            on this arm [–]: how far a robot type's model may be off one unit of it (on
+            the plant family, levels ±20 % that vary ±15 % along a joint's travel: 0.68–1.38
+            of the model's). With ``friction_uncertainty`` None, a joint the start-up
+            calibration did not measure (none without one) takes the larger of this and the
+            model's own error; a measured level carries ``calibration.friction_accuracy``.
+            A friction model given to the controller counts as identified on this arm (its
+            own error stands); 0 trusts the description's model as well.
         bias_time: Time constant of the learned model-error bias [s].
         reanchor_error: Tracking error that re-anchors the references [rad].
         limit_zone: Near a joint limit (within this of the hard limit) the references
@@ -149,6 +157,7 @@ class LeadThroughParameters:
     velocity_time: float = 0.05
     mass_uncertainty: float = 0.05
     friction_uncertainty: float | None = None
+    unmeasured_friction_error: float = 0.35
     stiction_margin: float = 0.05
     bias_time: float = 1.0
     reanchor_error: float = 0.05
@@ -178,6 +187,7 @@ class LeadThroughParameters:
             "rest_damping",
             "assist_knee",
             "drive_gain_uncertainty",
+            "unmeasured_friction_error",
         ):
             real(name, getattr(self, name), minimum=0.0, error=ParameterError)
         if self.friction_uncertainty is not None:
