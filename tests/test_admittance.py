@@ -12,6 +12,7 @@ from leadthrough.control.admittance import (
     keep_within,
     motion_sign,
     operator_weight,
+    reanchored,
     settled_reference,
     virtual_damping,
 )
@@ -166,3 +167,18 @@ def test_settled_reference_has_no_step_in_speed_or_weight():
     weight = np.linspace(0.0, 1.0, 2001)
     q_ref = settled_reference(np.full(2001, 0.01), np.zeros(2001), np.zeros(2001), weight, 0.04)
     assert np.all(np.diff(q_ref) > 0.0)
+
+
+def test_a_lost_reference_slows_to_a_lagging_joint_and_never_follows_one_that_runs():
+    """Re-anchored: position to the joint; velocity to it only where it lags behind.
+
+    Joints (reference velocity → joint velocity): stuck (0.2 → 0), lagging (0.2 → 0.1),
+    running ahead (0.2 → 0.5), running against (−0.2 → 0.3), and one still tracked.
+    """
+    references = AdmittanceState(np.zeros(5), np.array([0.2, 0.2, 0.2, -0.2, 0.2]))
+    q = np.array([0.1, 0.1, 0.1, 0.1, 0.01])
+    qd = np.array([0.0, 0.1, 0.5, 0.3, 0.5])
+    lost = np.abs(q) > 0.05
+    result = reanchored(references, q, qd, lost)
+    np.testing.assert_array_equal(result.q_ref, [0.1, 0.1, 0.1, 0.1, 0.0])
+    np.testing.assert_array_equal(result.qd_ref, [0.0, 0.1, 0.2, -0.2, 0.2])

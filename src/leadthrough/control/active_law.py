@@ -34,6 +34,7 @@ from leadthrough.control.admittance import (
     keep_within,
     motion_sign,
     operator_weight,
+    reanchored,
     settled_reference,
     tracking_torque,
     virtual_damping,
@@ -257,8 +258,9 @@ class ActiveLaw:
         Virtual inertia k_M M(q) and damping :func:`virtual_damping` (``drive`` the
         admittance's input, ``push`` the same before the operator weight); the PD gains
         follow the joint inertias m_ii(q). A joint whose tracking is lost (an end-stop, a
-        collision) has its references re-anchored to the measured state, and one that
-        rests with no push has its position reference drawn to where it is
+        collision, a joint that runs ahead) has its references re-anchored
+        (:func:`~leadthrough.control.admittance.reanchored`), and one that rests with no
+        push has its position reference drawn to where it is
         (:func:`~leadthrough.control.admittance.settled_reference`): nothing winds up.
         """
         p = self.parameters
@@ -268,8 +270,7 @@ class ActiveLaw:
         inertia = np.diag(mass)
         references = self.references or AdmittanceState(q.copy(), qd.copy())
         lost = np.abs(references.q_ref - q) > p.reanchor_error
-        references = AdmittanceState(np.where(lost, q, references.q_ref),
-                                     np.where(lost, qd, references.qd_ref))  # fmt: skip
+        references = reanchored(references, q, qd, lost)
         moving = motion_sign(references.qd_ref, p.rest_velocity)
         self.damping_weight = self._damping_weight(push, moving)
         q_ref = settled_reference(references.q_ref, q, moving, self.damping_weight,

@@ -9,8 +9,8 @@ damping so that it is stable for any D̃::
 
 and tracked with ``τ_fb = K_P (q_ref − q) + K_D (q̇_ref − q̇)`` (eq. 6.4); ``K_P = 0`` is
 damping control (§6.3.1). References never wind up: they are kept within the soft
-joint limits and re-anchored to the measured state when tracking is lost (an end-stop,
-a collision).
+joint limits and re-anchored when tracking is lost (an end-stop, a collision, a joint
+that runs ahead: :func:`reanchored`).
 
 Which part of the estimate is the operator's is weighed smoothly by how far it stands
 out of the model's own uncertainty (:func:`operator_weight`), and the virtual damping
@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from typing import cast
 
 import numpy as np
+from numpy.typing import NDArray
 
 from leadthrough.model.description import FloatArray
 
@@ -148,6 +149,32 @@ def damping_weight(
     idle, along = residual * (1.0 - np.abs(moving)), np.maximum(sustained, 0.0)
     push = np.sqrt(idle * idle + along * along)
     return operator_weight(push, uncertainty, knee)
+
+
+def reanchored(
+    references: AdmittanceState, q: FloatArray, qd: FloatArray, lost: NDArray[np.bool_]
+) -> AdmittanceState:
+    """The references where tracking is lost (``lost``), re-anchored to the joint.
+
+    The position reference goes to where the joint is, so nothing winds up. The velocity
+    reference slows to a joint that lags behind it (an end-stop, a collision, stiction:
+    ``0 ≤ q̇ / q̇_ref < 1``) and is never sped up or turned by one: a
+    joint that runs ahead of it, or against it, keeps the admittance's velocity and so
+    the PD's damping, the one thing that brakes a joint nobody pushes. Taking the
+    joint's velocity there (before) made the reference follow a released wrist joint
+    that the feed-forward's errors drove: it ran 1.3 rad into its end-stop (held-out
+    plant dry #20).
+
+    Args:
+        references: Position [rad] and velocity [rad/s] references.
+        q: Joint positions [rad].
+        qd: Joint velocities [rad/s].
+        lost: Where the tracking is lost.
+    """
+    v = references.qd_ref
+    lags = np.where(v > 0.0, (qd >= 0.0) & (qd < v), (qd <= 0.0) & (qd > v))
+    return AdmittanceState(np.where(lost, q, references.q_ref),
+                           np.where(lost & lags, qd, v))  # fmt: skip
 
 
 def settled_reference(

@@ -12,7 +12,8 @@ average over 20 000 random periods):
   remove the friction the model may overstate, weigh the residual by the model's own
   uncertainty (:func:`~leadthrough.control.admittance.operator_weight`);
 * :func:`admittance_law` is ``ActiveLaw._admittance``: ignore an end-stop's reaction,
-  re-anchor lost references, weigh the push that starts or sustains each motion
+  re-anchor lost references (:func:`~leadthrough.control.admittance.reanchored`), weigh
+  the push that starts or sustains each motion
   (:func:`~leadthrough.control.admittance.damping_weight`), integrate the admittance
   (:func:`~leadthrough.control.admittance.admittance_step`, the (k_M M + dt D̃) system
   solved by Gaussian elimination with partial pivoting), cap and bound the references,
@@ -166,8 +167,10 @@ def admittance_law(q, qd, drive, constraint, mass, residuals, uncertainty, joint
         reaction = (q[i] > joint[2, i] and tau_in < 0) or (q[i] < joint[1, i] and tau_in > 0)
         if limit_aware != 0.0 and reaction:  # near a limit, a push away is the stop's reaction
             tau_in = push_in = 0.0
-        if abs(q_ref[i] - q[i]) > reanchor:  # tracking lost: re-anchor
-            q_ref[i], qd_ref[i] = q[i], qd[i]
+        if abs(q_ref[i] - q[i]) > reanchor:  # tracking lost: re-anchor (reanchored)
+            v, w = qd_ref[i], qd[i]
+            q_ref[i] = q[i]
+            qd_ref[i] = w if (v > 0.0 and 0.0 <= w < v) or (v < 0.0 and v < w <= 0.0) else v
         work[i, n] = dt * tau_in
         v = qd_ref[i]  # what starts or sustains the motion: at rest all of it, moving along
         moving = v / math.sqrt(v * v + rest_velocity * rest_velocity)

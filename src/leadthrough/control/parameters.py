@@ -118,7 +118,8 @@ class LeadThroughParameters:
             A friction model given to the controller counts as identified on this arm (its
             own error stands); 0 trusts the description's model as well.
         bias_time: Time constant of the learned model-error bias [s].
-        reanchor_error: Tracking error that re-anchors the references [rad].
+        reanchor_error: Tracking error that re-anchors the references [rad]
+            (:func:`~leadthrough.control.admittance.reanchored`).
         limit_zone: Near a joint limit (within this of the hard limit) the references
             stay out and a push *away* from the limit is not taken for the operator's
             (it is the end-stop's reaction) [rad].
