@@ -125,11 +125,10 @@ class ActiveLaw:
             relative = np.full(self.n, p.friction_uncertainty)
         relative = np.maximum(relative, p.stiction_margin)
         self.friction_error = relative
-        self._viscous_relative = relative
         self._friction_tolerance = relative * friction.coulomb + 2.0 * friction.noise_std
         self._rest_tolerance = p.stiction_margin * friction.coulomb + 2.0 * friction.noise_std
         self._joint_constants = np.array([self._friction_tolerance, self._reference_low,
-            self._reference_high, relative, self._viscous_relative, self._rest_tolerance,
+            self._reference_high, relative, relative, self._rest_tolerance,
             self._speed_cap])  # fused.JOINT_ROWS  # fmt: skip
 
     def reset(self) -> None:
@@ -247,7 +246,7 @@ class ActiveLaw:
         """
         viscous = self.friction.viscous * qd
         coulomb = self.friction.mean(qd, q) - viscous
-        return self.friction_error * coulomb + self._viscous_relative * viscous
+        return self.friction_error * coulomb + self.friction_error * viscous
 
     def _admittance(
         self, q: FloatArray, qd: FloatArray, drive: FloatArray, mass: FloatArray,

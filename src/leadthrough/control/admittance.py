@@ -158,12 +158,11 @@ def reanchored(
 
     The position reference goes to where the joint is, so nothing winds up. The velocity
     reference slows to a joint that lags behind it (an end-stop, a collision, stiction:
-    ``0 ≤ q̇ / q̇_ref < 1``) and is never sped up or turned by one: a
-    joint that runs ahead of it, or against it, keeps the admittance's velocity and so
-    the PD's damping, the one thing that brakes a joint nobody pushes. Taking the
-    joint's velocity there (before) made the reference follow a released wrist joint
-    that the feed-forward's errors drove: it ran 1.3 rad into its end-stop (held-out
-    plant dry #20).
+    ``0 ≤ q̇ / q̇_ref < 1``) and is never sped up or turned by one: a joint that runs
+    ahead of it, or against it, keeps the admittance's velocity and so the PD's damping,
+    the one thing that brakes a joint nobody pushes. Taking the joint's velocity there
+    (before) made the reference follow a released wrist joint that the feed-forward's
+    errors drove: it ran 1.3 rad into its end-stop (held-out plant dry #20).
 
     Args:
         references: Position [rad] and velocity [rad/s] references.

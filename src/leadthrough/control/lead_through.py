@@ -127,7 +127,7 @@ class LeadThrough:
         robot: RobotDescription,
         friction: FrictionModel,
         measured: NDArray[np.bool_] | None = None,
-    ) -> None:  # fmt: skip
+    ) -> None:
         """The model-based parts, for the model of ``robot`` (and a payload) and ``friction``.
 
         ``measured``: the joints whose friction level was measured on this arm (None: those
