@@ -87,7 +87,6 @@ class ActiveLaw:
         nominal_friction: FrictionModel,
     ) -> None:
         self.robot, self.parameters, self.dt = robot, parameters, dt
-        self.nominal_friction = nominal_friction
         self.n = robot.n_joints
         self._reference_low = robot.q_min + parameters.limit_zone
         self._reference_high = robot.q_max - parameters.limit_zone
@@ -128,7 +127,7 @@ class ActiveLaw:
         self._friction_tolerance = relative * friction.coulomb + 2.0 * friction.noise_std
         self._rest_tolerance = p.stiction_margin * friction.coulomb + 2.0 * friction.noise_std
         self._joint_constants = np.array([self._friction_tolerance, self._reference_low,
-            self._reference_high, relative, relative, self._rest_tolerance,
+            self._reference_high, relative, self._rest_tolerance,
             self._speed_cap])  # fused.JOINT_ROWS  # fmt: skip
 
     def reset(self) -> None:
@@ -246,7 +245,7 @@ class ActiveLaw:
         """
         viscous = self.friction.viscous * qd
         coulomb = self.friction.mean(qd, q) - viscous
-        return self.friction_error * coulomb + self.friction_error * viscous
+        return self.friction_error * (coulomb + viscous)
 
     def _admittance(
         self, q: FloatArray, qd: FloatArray, drive: FloatArray, mass: FloatArray,

@@ -32,10 +32,10 @@ import math
 from leadthrough.compiled import kernel
 
 #: Rows of the per-joint constants: the friction tolerance 2σ + relative τ_C, the low and
-#: high reference limits, the Coulomb and viscous relative errors, the tolerance at rest
-#: and the speed cap of the references.
+#: high reference limits, the friction's relative error (Coulomb and viscous), the
+#: tolerance at rest and the speed cap of the references.
 JOINT_ROWS = ("friction_tolerance", "reference_low", "reference_high", "friction_relative",
-              "viscous_relative", "rest_tolerance", "speed_cap")  # fmt: skip
+              "rest_tolerance", "speed_cap")  # fmt: skip
 #: Scalars of :func:`operator_drive`, in order.
 DRIVE_SCALARS = ("gravity_uncertainty", "dt", "bias_time", "drive_gain_uncertainty",
                  "assist_knee")  # fmt: skip
@@ -103,12 +103,12 @@ def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, sc
             residual = 0.0
         half_level = 0.5 * level[i]
         coulomb = (half_level * (upper[i] + lower[i]) + viscous[i]) - viscous[i]
-        margin = joint[3, i] * coulomb + joint[4, i] * viscous[i]
+        margin = joint[3, i] * (coulomb + viscous[i])
         residual = (residual - margin) - gain_uncertainty * feedback[i]
         unknown = abs(gravity[i])
         changed = abs(gravity[i] - gravity_learned[i])
         tolerance = gravity_uncertainty * ((1.0 - confidence) * unknown + confidence * changed)
-        spread = (joint[5, i] + tolerance) + half_level * (upper[i] - lower[i])
+        spread = (joint[4, i] + tolerance) + half_level * (upper[i] - lower[i])
         residuals[i], uncertainty[i] = residual, spread
         if knee == 0.0:
             w = 1.0
@@ -217,7 +217,7 @@ def admittance_law(q, qd, drive, constraint, mass, residuals, uncertainty, joint
         work[i, n] = total / work[i, i]
     for i in range(n):
         velocity = work[i, n]
-        cap = joint[6, i]
+        cap = joint[5, i]
         if limit_aware != 0.0:  # hold a joint where it is inside the limit zone
             low = joint[1, i] if joint[1, i] < q[i] else q[i]
             high = joint[2, i] if joint[2, i] > q[i] else q[i]

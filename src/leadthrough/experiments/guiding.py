@@ -294,7 +294,7 @@ def joint_motion(qd: FloatArray, dt: float) -> FloatArray:
 
     What is motion, as :func:`tool_vibration` takes the rest for vibration: a resting
     joint's twitch under the dither (15 Hz, up to ±0.01 rad/s on some LuGre plants,
-    ±0.05 mrad) is not motion.
+    ±0.2 mrad) is not motion.
     """
     return _split(qd, dt, "lowpass")
 
