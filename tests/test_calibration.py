@@ -6,7 +6,11 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from leadthrough.control.calibration import CalibrationParameters, implausible_friction
+from leadthrough.control.calibration import (
+    CalibrationParameters,
+    CalibrationRun,
+    implausible_friction,
+)
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.control.parameters import LeadThroughParameters
 from leadthrough.friction.model import FrictionModel
@@ -103,6 +107,30 @@ def test_a_level_nothing_measured_carries_the_unit_spread(yumi):
     np.testing.assert_allclose(LeadThrough(yumi, parameters=trusting).law.friction_error, 0.2)
     identified = dataclasses.replace(FrictionModel.from_robot(yumi), relative_error=np.full(7, 0.1))
     np.testing.assert_allclose(LeadThrough(yumi, friction=identified).law.friction_error, 0.1)
+
+
+def test_a_joint_that_jumps_is_read_only_where_it_slides_at_the_calibrations_pace(yumi):
+    """Readings above twice the calibration's speed are stick-slip jumps: none is kept.
+
+    The observer lags a jump (its momentum changes within milliseconds), so its reading is
+    off: here by +0.3 Nm. A joint that only jumps is left unmeasured; one that also slides
+    at pace is read from those readings alone.
+    """
+    run = CalibrationRun(lt.Dynamics(yumi), FrictionModel.from_robot(yumi), yumi.home())
+    speed, n = run.parameters.speed, yumi.n_joints
+    for k in range(40):
+        direction = 1.0 if k % 2 else -1.0
+        pace = np.ones(n)
+        pace[4] = 3.5  # joint 5 always jumps
+        pace[5] = 3.5 if k < 20 else 1.0  # joint 6 half the time
+        qd = direction * pace * speed
+        run.record(1.0, qd, 0.1 + 0.05 * direction + np.where(pace > 2.0, 0.3, 0.0))
+    result = run.result()
+    assert result.accepted, result.reason
+    np.testing.assert_array_equal(result.measured, np.arange(n) != 4)
+    np.testing.assert_allclose(result.gravity_error[result.measured], 0.1)
+    np.testing.assert_allclose(result.coulomb_error[result.measured], 0.05)
+    assert result.gravity_error[4] == 0.0
 
 
 def test_the_plausible_friction_band_is_symmetric_in_the_ratio():

@@ -13,8 +13,9 @@ the position reference of a resting joint nobody pushes drawn to where it is
 (``admittance.braking_cap``) and the joints' estimates read together as a force at the
 tool (``estimation.tool_force``), then a friction level nothing measured on this arm
 taken as known to the spread of units only (``unmeasured_friction_error``), then lost
-references re-anchored without taking up a joint's run (``admittance.reanchored``). A
-faster step must reproduce them.
+references re-anchored without taking up a joint's run (``admittance.reanchored``), then
+the calibration reading a joint only while it slides at the motion's pace
+(``calibration._JUMPING``). A faster step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::
