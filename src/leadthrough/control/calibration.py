@@ -57,7 +57,7 @@ BoolArray = NDArray[np.bool_]
 _SLIDING = 0.25
 #: A joint faster than this multiple of the calibration speed jumps out of stiction [–].
 _JUMPING = 2.0
-#: Sliding readings needed in each direction [–].
+#: Paced sliding readings needed in each direction (fewer: the joint is not measured) [–].
 _ENOUGH = 3
 #: A joint this many strokes off its calibration motion has been pushed [–].
 _DISTURBED = 4.0
