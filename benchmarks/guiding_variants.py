@@ -57,6 +57,11 @@ def joint_estimates(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
     return _build(robot, mode, tool_force=None)
 
 
+def no_unwinding(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """References that wind up against a joint stiction holds (the previous default)."""
+    return _build(robot, mode, unwind_time=None)
+
+
 def no_weighting(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
     """``assist_knee = 0``: the whole residual drives, and the damping never rises."""
     return _build(robot, mode, assist_knee=0.0)

@@ -14,6 +14,7 @@ from leadthrough.control.admittance import (
     operator_weight,
     reanchored,
     settled_reference,
+    unwound,
     virtual_damping,
 )
 
@@ -182,3 +183,24 @@ def test_a_lost_reference_slows_to_a_lagging_joint_and_never_follows_one_that_ru
     result = reanchored(references, q, qd, lost)
     np.testing.assert_array_equal(result.q_ref, [0.1, 0.1, 0.1, 0.1, 0.0])
     np.testing.assert_array_equal(result.qd_ref, [0.0, 0.1, 0.2, -0.2, 0.2])
+
+
+def test_a_lagging_joints_reference_relaxes_to_it_at_the_unwinding_rate():
+    """Unwound: q̇_ref → q̇ as (1 − rate)^k where the joint lags; untouched elsewhere.
+
+    Joints (reference velocity → joint velocity): stuck (0.2 → 0), lagging (−0.2 →
+    −0.1), running ahead (0.2 → 0.5), running against (−0.2 → 0.3), at rest (0 → 0.1).
+    The lagging ones never overshoot the joint's velocity nor change sign.
+    """
+    qd_ref = np.array([0.2, -0.2, 0.2, -0.2, 0.0])
+    qd = np.array([0.0, -0.1, 0.5, 0.3, 0.1])
+    rate, periods = 0.074, 40  # dt / (unwind_time + dt) with 0.004 / 0.05
+    history = [qd_ref]
+    for _ in range(periods):
+        history.append(unwound(history[-1], qd, rate))
+    decay = (1.0 - rate) ** periods
+    expected = [0.2 * decay, -0.1 - 0.1 * decay, 0.2, -0.2, 0.0]
+    np.testing.assert_allclose(history[-1], expected, rtol=1e-12, atol=1e-15)
+    history = np.array(history)
+    assert np.all(np.sign(history[:, :2]) == np.sign(qd_ref[:2]))
+    assert np.all(np.abs(history[:, 1]) >= 0.1)

@@ -77,7 +77,7 @@ def _law_run(robot: lt.RobotDescription, parameters: LeadThroughParameters, fric
         ("yumi", {}, True),  # a position-dependent Coulomb level
         ("yumi", {"bias_time": 0.02}, False),  # the bias learns to its bound at once
         ("yumi", {"limit_aware": False, "assist_knee": 0.0, "position_bandwidth": 0.0}, False),
-        ("panda", {"rest_damping": 0.0, "mass_uncertainty": 0.0}, False),
+        ("panda", {"rest_damping": 0.0, "mass_uncertainty": 0.0, "unwind_time": None}, False),
     ],
 )
 def test_compiled_law_equals_the_numpy_reference_over_random_periods(robot_name, changes, cable):

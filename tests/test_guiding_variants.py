@@ -14,7 +14,7 @@ import leadthrough as lt
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 import guiding_variants
 
-FACTORIES = ("no_weighting", "full_residual", "long_stroke", "long_stroke_trusted",
+FACTORIES = ("no_unwinding", "no_weighting", "full_residual", "long_stroke", "long_stroke_trusted",
              "strong_dither", "tool_wrench_prior", "smooth_rate_guiding",
              "no_friction_margin", "half_friction_margin",
              "three_quarter_friction_margin", "joint_estimates",

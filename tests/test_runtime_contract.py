@@ -162,6 +162,7 @@ def test_one_delay_line_for_the_command_and_its_dither(monkeypatch, delay):
         ({"measurement_delay": 0}, "measurement_delay"),
         ({"measurement_delay": 1.5}, "measurement_delay"),
         ({"rest_velocity": 0.0}, "rest_velocity"),
+        ({"unwind_time": 0.0}, "unwind_time"),
         ({"assist_speed_fraction": 1.5}, "assist_speed_fraction"),
         ({"dither": DitherParameters(moving_velocity=0.02)}, "rest_velocity"),
     ],

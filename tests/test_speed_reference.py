@@ -15,7 +15,8 @@ tool (``estimation.tool_force``), then a friction level nothing measured on this
 taken as known to the spread of units only (``unmeasured_friction_error``), then lost
 references re-anchored without taking up a joint's run (``admittance.reanchored``), then
 the calibration reading a joint only while it slides at the motion's pace
-(``calibration._JUMPING``). A faster step must reproduce them.
+(``calibration._JUMPING``), then the velocity reference of a lagging joint unwound
+towards its velocity (``admittance.unwound``). A faster step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

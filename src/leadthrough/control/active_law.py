@@ -37,6 +37,7 @@ from leadthrough.control.admittance import (
     reanchored,
     settled_reference,
     tracking_torque,
+    unwound,
     virtual_damping,
 )
 from leadthrough.control.bias import ModelErrorBias
@@ -94,12 +95,15 @@ class ActiveLaw:
         p = parameters  # the scalars of the compiled law (fused.DRIVE/ADMITTANCE_SCALARS)
         self._push_average = dt / (p.push_time + dt)  # the average over push_time
         self._settle_rate = dt / (p.settle_time + dt)  # a resting reference's, settle_time
+        # a lagging joint's velocity reference's, unwind_time (None: never)
+        self._unwind_rate = 0.0 if p.unwind_time is None else dt / (p.unwind_time + dt)
         self._drive_scalars = np.array([p.gravity_uncertainty, dt, p.bias_time,
                                         p.drive_gain_uncertainty, p.assist_knee])  # fmt: skip
         self._admittance_scalars = np.array([float(p.limit_aware), p.reanchor_error,
             p.damping_time, p.rest_damping, p.inertia_scale, dt,
             (2.0 * np.pi * p.position_bandwidth) ** 2, p.velocity_time, p.assist_knee,
-            p.rest_velocity, self._push_average, self._settle_rate, p.limit_zone])  # fmt: skip
+            p.rest_velocity, self._push_average, self._settle_rate, p.limit_zone,
+            self._unwind_rate])  # fmt: skip
         self._terms = np.zeros((4, self.n))  # the friction terms of a period (terms_into)
         self._term_rows = tuple(self._terms)  # its rows (views), for the compiled drive
         self.use_friction(nominal_friction)
@@ -257,7 +261,9 @@ class ActiveLaw:
         admittance's input, ``push`` the same before the operator weight); the PD gains
         follow the joint inertias m_ii(q). A joint whose tracking is lost (an end-stop, a
         collision, a joint that runs ahead) has its references re-anchored
-        (:func:`~leadthrough.control.admittance.reanchored`), and one that rests with no
+        (:func:`~leadthrough.control.admittance.reanchored`), one that lags behind them has
+        its velocity reference relaxed towards its own
+        (:func:`~leadthrough.control.admittance.unwound`), and one that rests with no
         push has its position reference drawn to where it is
         (:func:`~leadthrough.control.admittance.settled_reference`): nothing winds up.
         """
@@ -269,6 +275,8 @@ class ActiveLaw:
         references = self.references or AdmittanceState(q.copy(), qd.copy())
         lost = np.abs(references.q_ref - q) > p.reanchor_error
         references = reanchored(references, q, qd, lost)
+        references = AdmittanceState(references.q_ref,
+                                     unwound(references.qd_ref, qd, self._unwind_rate))  # fmt: skip
         moving = motion_sign(references.qd_ref, p.rest_velocity)
         self.damping_weight = self._damping_weight(push, moving)
         q_ref = settled_reference(references.q_ref, q, moving, self.damping_weight,

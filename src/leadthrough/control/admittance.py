@@ -9,8 +9,9 @@ damping so that it is stable for any D̃::
 
 and tracked with ``τ_fb = K_P (q_ref − q) + K_D (q̇_ref − q̇)`` (eq. 6.4); ``K_P = 0`` is
 damping control (§6.3.1). References never wind up: they are kept within the soft
-joint limits and re-anchored when tracking is lost (an end-stop, a collision, a joint
-that runs ahead: :func:`reanchored`).
+joint limits, re-anchored when tracking is lost (an end-stop, a collision, a joint
+that runs ahead: :func:`reanchored`) and relaxed towards a joint that lags behind them
+(:func:`unwound`).
 
 Which part of the estimate is the operator's is weighed smoothly by how far it stands
 out of the model's own uncertainty (:func:`operator_weight`), and the virtual damping
@@ -171,9 +172,36 @@ def reanchored(
         lost: Where the tracking is lost.
     """
     v = references.qd_ref
-    lags = np.where(v > 0.0, (qd >= 0.0) & (qd < v), (qd <= 0.0) & (qd > v))
     return AdmittanceState(np.where(lost, q, references.q_ref),
-                           np.where(lost & lags, qd, v))  # fmt: skip
+                           np.where(lost & lagging(v, qd), qd, v))  # fmt: skip
+
+
+def lagging(qd_ref: FloatArray, qd: FloatArray) -> NDArray[np.bool_]:
+    """Where a joint lags behind its velocity reference: ``0 ≤ q̇ / q̇_ref < 1``."""
+    return np.where(qd_ref > 0.0, (qd >= 0.0) & (qd < qd_ref), (qd <= 0.0) & (qd > qd_ref))
+
+
+def unwound(qd_ref: FloatArray, qd: FloatArray, rate: float) -> FloatArray:
+    """Velocity reference of the joints that lag behind it, relaxed towards theirs [rad/s].
+
+    A joint that stiction holds (or a contact, or the end-stop) while the operator pushes
+    does not follow its admittance: the reference would run on at the speed the push
+    asks for, and the PD's damping store the difference as a push of its own. When the
+    joint breaks away the stored push adds to the operator's, it slips, the estimate
+    reads the slip's drag, the reference brakes and the joint sticks again: stick-slip at
+    a few hertz (held-out LuGre #24, a stiff hand: the reference 34 mrad ahead at 0.15
+    rad/s). Relaxing a lagging joint's reference towards its velocity every period,
+    ``q̇_ref += rate (q̇ − q̇_ref)`` (the anti-windup of a saturated integrator), keeps
+    that store to what the joint's own lag builds within ``unwind_time``; like
+    :func:`reanchored`, it never speeds a reference up nor turns it, so a joint that runs
+    ahead keeps the PD's damping.
+
+    Args:
+        qd_ref: Velocity reference [rad/s].
+        qd: Joint velocities [rad/s].
+        rate: Share of the lag removed per period, ``dt / (unwind_time + dt)`` [–].
+    """
+    return cast(FloatArray, np.where(lagging(qd_ref, qd), qd_ref + rate * (qd - qd_ref), qd_ref))
 
 
 def settled_reference(

@@ -12,7 +12,8 @@ average over 20 000 random periods):
   remove the friction the model may overstate, weigh the residual by the model's own
   uncertainty (:func:`~leadthrough.control.admittance.operator_weight`);
 * :func:`admittance_law` is ``ActiveLaw._admittance``: ignore an end-stop's reaction,
-  re-anchor lost references (:func:`~leadthrough.control.admittance.reanchored`), weigh
+  re-anchor lost references (:func:`~leadthrough.control.admittance.reanchored`), relax
+  a lagging joint's velocity reference (:func:`~leadthrough.control.admittance.unwound`), weigh
   the push that starts or sustains each motion
   (:func:`~leadthrough.control.admittance.damping_weight`), integrate the admittance
   (:func:`~leadthrough.control.admittance.admittance_step`, the (k_M M + dt D̃) system
@@ -43,7 +44,8 @@ DRIVE_SCALARS = ("gravity_uncertainty", "dt", "bias_time", "drive_gain_uncertain
 #: is (2π f)² [1/s²]).
 ADMITTANCE_SCALARS = ("limit_aware", "reanchor_error", "damping_time", "rest_damping",
                       "inertia_scale", "dt", "position_gain", "velocity_time", "assist_knee",
-                      "rest_velocity", "push_average", "settle_rate", "limit_zone")  # fmt: skip
+                      "rest_velocity", "push_average", "settle_rate", "limit_zone",
+                      "unwind_rate")  # fmt: skip
 
 
 @kernel
@@ -159,7 +161,7 @@ def admittance_law(q, qd, drive, constraint, mass, residuals, uncertainty, joint
         work: Scratch space, (n, n + 1).
     """
     (limit_aware, reanchor, damping_time, rest, scale, dt, position_gain, velocity_time, knee,
-     rest_velocity, average, settle, zone) = scalars  # fmt: skip
+     rest_velocity, average, settle, zone, unwind) = scalars  # fmt: skip
     n = q.shape[0]
     for i in range(n):  # the reference system (k_M M + dt D̃) x = k_M M q̇_ref + dt τ_in
         tau_in = drive[i] + constraint[i]
@@ -171,6 +173,9 @@ def admittance_law(q, qd, drive, constraint, mass, residuals, uncertainty, joint
             v, w = qd_ref[i], qd[i]
             q_ref[i] = q[i]
             qd_ref[i] = w if (v > 0.0 and 0.0 <= w < v) or (v < 0.0 and v < w <= 0.0) else v
+        v, w = qd_ref[i], qd[i]  # a lagging joint's velocity reference relaxes to it (unwound)
+        if (v > 0.0 and 0.0 <= w < v) or (v < 0.0 and v < w <= 0.0):
+            qd_ref[i] = v + unwind * (w - v)
         work[i, n] = dt * tau_in
         v = qd_ref[i]  # what starts or sustains the motion: at rest all of it, moving along
         moving = v / math.sqrt(v * v + rest_velocity * rest_velocity)

@@ -84,6 +84,12 @@ class LeadThroughParameters:
             (:func:`~leadthrough.control.admittance.settled_reference`): the tracking
             spring lets go of the push left when the motion ended, and holds the joint
             where it stopped against a slower creep.
+        unwind_time: Time constant with which the velocity reference of a joint that lags
+            behind it (stiction holds the joint, a contact, an end-stop) relaxes towards
+            the joint's velocity [s] (:func:`~leadthrough.control.admittance.unwound`):
+            the admittance cannot wind up against a joint that does not follow, so the
+            PD has no stored push to release when the joint breaks away (stick-slip).
+            None never unwinds (the thesis).
         assist_knee: Residual torque, in multiples of the model's uncertainty, of which half
             passes to the admittance [–] (:func:`~leadthrough.control.admittance.operator_weight`);
             0 passes everything (the thesis).
@@ -151,6 +157,7 @@ class LeadThroughParameters:
     damping_time: float = 0.5
     push_time: float = 0.1
     settle_time: float = 0.3
+    unwind_time: float | None = 0.05
     rest_damping: float = 20.0
     assist_knee: float = 0.5
     drive_gain_uncertainty: float = 0.1
@@ -191,6 +198,8 @@ class LeadThroughParameters:
             "unmeasured_friction_error",
         ):
             real(name, getattr(self, name), minimum=0.0, error=ParameterError)
+        if self.unwind_time is not None:
+            real("unwind_time", self.unwind_time, minimum=0.0, strict=True, error=ParameterError)
         if self.friction_uncertainty is not None:
             real("friction_uncertainty", self.friction_uncertainty, minimum=0.0,
                  error=ParameterError)  # fmt: skip
@@ -263,7 +272,7 @@ class LeadThroughParameters:
                    position_bandwidth=6.0, velocity_time=0.008, mass_uncertainty=0.0,
                    friction_uncertainty=0.0, stiction_margin=0.0, drive_gain_uncertainty=0.0,
                    bias_time=1e6,
-                   reanchor_error=1e6,
+                   reanchor_error=1e6, unwind_time=None,
                    limit_aware=False, dither=None, **changes)  # fmt: skip
 
     @classmethod

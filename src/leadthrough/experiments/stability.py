@@ -27,6 +27,7 @@ in practice, so the region is a conservative guide, checked on the plants of
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -69,7 +70,9 @@ def loop_matrix(
 
     State: q, q̇ (the arm), p̂, τ̂ (the observer), q_ref, q̇_ref (the admittance), the
     torque applied over the last period and ``delay`` commands on their way; with three
-    observer gains the observer's torque rate ṙ̂ comes after the queue.
+    observer gains the observer's torque rate ṙ̂ comes after the queue. The velocity
+    reference is unwound every period (as if the joint always lagged) unless
+    ``unwind_time`` is None.
     """
     m, p = joint.inertia, parameters
     arm = expm(np.block([[np.array([[0.0, 1.0], [-joint.stiffness / m, -joint.damping / m]]),
@@ -77,6 +80,7 @@ def loop_matrix(
     virtual_mass = p.inertia_scale * m
     virtual_damping = m / p.damping_time
     kp, kd = m * (2.0 * np.pi * p.position_bandwidth) ** 2, m / p.velocity_time
+    unwind = 0.0 if p.unwind_time is None else dt / (p.unwind_time + dt)
     gain_p, gain_tau, gain_rate = (*joint.observer_gains, 0.0)[:3]
     rates = len(joint.observer_gains) - 2  # 0, or 1 for the smooth-rate observer
 
@@ -88,6 +92,7 @@ def loop_matrix(
         p_hat = prior + gain_p * innovation
         tau_hat = tau_hat + dt * np.sum(rate) + gain_tau * innovation
         rate = rate + gain_rate * innovation
+        qd_ref = qd_ref + unwind * (qd - qd_ref)  # unwound, as if the joint always lagged
         qd_ref = (virtual_mass * qd_ref + dt * tau_hat) / (virtual_mass + dt * virtual_damping)
         q_ref = q_ref + dt * qd_ref
         command = kp * (q_ref - q) + kd * (qd_ref - qd)
@@ -145,9 +150,19 @@ def worst_damping(
     dt: float = 0.004,
     delay: int = 1,
 ) -> float:
-    """Smallest damping ratio over the joints of ``robot`` at home [–] (< 0: unstable)."""
+    """Smallest damping ratio over the joints of ``robot`` at home [–] (< 0: unstable).
+
+    The unwinding of a lagging joint's reference (``unwind_time``) acts only while the
+    joint lags, part of each cycle; a linear loop cannot switch, so it is taken both
+    always on and always off, and the smaller ζ counts. (On the YuMi with a firm hand it
+    costs the defaults' loop ζ, 0.32 → 0.19, and helps a light admittance's.)
+    """
     loops = joint_loops(robot, parameters, hand_stiffness, hand_damping, dt)
-    return min(least_damping(loop_matrix(loop, parameters, dt, delay), dt) for loop in loops)
+    variants = [parameters]
+    if parameters.unwind_time is not None:
+        variants.append(dataclasses.replace(parameters, unwind_time=None))
+    return min(least_damping(loop_matrix(loop, variant, dt, delay), dt)
+               for loop in loops for variant in variants)  # fmt: skip
 
 
 @dataclass(frozen=True, eq=False)
