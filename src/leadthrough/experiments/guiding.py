@@ -289,6 +289,33 @@ def tool_vibration(velocity: FloatArray, dt: float) -> float:
     return float(np.sqrt(np.mean(np.sum(high**2, axis=1))))
 
 
+def vibration_windows(
+    case: Case,
+    mode: str,
+    window: float = 0.5,
+    controller_factory: ControllerFactory | None = None,
+    robot: RobotDescription | None = None,
+) -> tuple[FloatArray, FloatArray]:
+    """Where in the held run of ``case`` the tool shakes: window starts [s] and RMS [m/s].
+
+    The tool velocity above :data:`VIBRATION_CUTOFF` (as :func:`tool_vibration`, filtered
+    over the whole run) in consecutive windows of ``window`` s from the grab on.
+    """
+    if robot is None:
+        from leadthrough.model import robots
+
+        robot = robots.yumi()
+    path = case_path(robot, case.path)
+    factory = controller_factory or default_factory
+    held, _ = _run(robot, case, mode, factory, np.inf, path.duration + HOLD)
+    dt = float(held.t[1] - held.t[0])
+    high = _split(np.gradient(held.flange_position, dt, axis=0), dt, "highpass")
+    starts = np.arange(0.0, held.t[-1], window)
+    rms = [np.sqrt(np.mean(np.sum(high[(held.t >= a) & (held.t < a + window)] ** 2, axis=1)))
+           for a in starts]  # fmt: skip
+    return starts, np.array(rms)
+
+
 def joint_motion(qd: FloatArray, dt: float) -> FloatArray:
     """The joint velocities below :data:`VIBRATION_CUTOFF` [rad/s] (zero-phase), (N, n).
 
