@@ -186,7 +186,7 @@ def unwound(qd_ref: FloatArray, qd: FloatArray, rate: float) -> FloatArray:
 
     A joint that stiction holds (or a contact, or the end-stop) while the operator pushes
     does not follow its admittance: the reference would run on at the speed the push
-    asks for, and the PD's damping store the difference as a push of its own. When the
+    asks for, and the PD's damper store the difference as a push of its own. When the
     joint breaks away the stored push adds to the operator's, it slips, the estimate
     reads the slip's drag, the reference brakes and the joint sticks again: stick-slip at
     a few hertz (held-out LuGre #24, a stiff hand: the reference 34 mrad ahead at 0.15
