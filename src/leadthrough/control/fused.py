@@ -169,12 +169,12 @@ def admittance_law(q, qd, drive, constraint, mass, residuals, uncertainty, joint
         reaction = (q[i] > joint[2, i] and tau_in < 0) or (q[i] < joint[1, i] and tau_in > 0)
         if limit_aware != 0.0 and reaction:  # near a limit, a push away is the stop's reaction
             tau_in = push_in = 0.0
+        v, w = qd_ref[i], qd[i]
+        lags = (v > 0.0 and 0.0 <= w < v) or (v < 0.0 and v < w <= 0.0)  # lagging
         if abs(q_ref[i] - q[i]) > reanchor:  # tracking lost: re-anchor (reanchored)
-            v, w = qd_ref[i], qd[i]
             q_ref[i] = q[i]
-            qd_ref[i] = w if (v > 0.0 and 0.0 <= w < v) or (v < 0.0 and v < w <= 0.0) else v
-        v, w = qd_ref[i], qd[i]  # a lagging joint's velocity reference relaxes to it (unwound)
-        if (v > 0.0 and 0.0 <= w < v) or (v < 0.0 and v < w <= 0.0):
+            qd_ref[i] = w if lags else v
+        elif lags:  # a lagging joint's velocity reference relaxes to it (unwound)
             qd_ref[i] = v + unwind * (w - v)
         work[i, n] = dt * tau_in
         v = qd_ref[i]  # what starts or sustains the motion: at rest all of it, moving along
