@@ -17,6 +17,7 @@ Usage:
     python benchmarks/guiding_quality.py [--cases quick] [--save out.json] [--compare old.json]
         [--factory module:function]   (the active controller: function(robot, mode))
         [--robot NAME] [--seeds 5-8]  (another arm; plants not developed on)
+        [--hands soft,firm]           (other hands of guiding.HANDS: 100 and 1000 N/m)
         [--uncalibrated]              (both modes without the start-up calibration)
 """
 
@@ -29,8 +30,10 @@ import sys
 import time
 
 from leadthrough.experiments.guiding import (
+    BENCHMARK_HANDS,
     DIAGNOSTICS,
     GOALS,
+    HANDS,
     cases,
     evaluate,
     uncalibrated_factory,
@@ -104,6 +107,12 @@ def main(argv: list[str] | None = None) -> None:
         help="plant seeds of the full set, e.g. 5-8 or 5,9 (default 1-4, the development "
         "seeds; others are plants the defaults were not developed on)",
     )
+    parser.add_argument(
+        "--hands",
+        default=",".join(BENCHMARK_HANDS),
+        help=f"hands of the full set, from {', '.join(HANDS)} (default "
+        f"{','.join(BENCHMARK_HANDS)}; the circle takes the first)",
+    )
     parser.add_argument("--save", help="write the per-case figures and the summary to JSON")
     parser.add_argument("--compare", help="a JSON saved before: print its summary alongside")
     parser.add_argument(
@@ -116,8 +125,11 @@ def main(argv: list[str] | None = None) -> None:
     if args.factory:
         module, _, name = args.factory.partition(":")
         factory = getattr(importlib.import_module(module), name)
-    seeds = parse_seeds(args.seeds)
-    total, start = len(cases(args.cases, seeds)), time.perf_counter()
+    seeds, hands = parse_seeds(args.seeds), args.hands.split(",")
+    unknown = sorted(set(hands) - set(HANDS))
+    if unknown:
+        parser.error(f"unknown hand(s) {', '.join(unknown)}: choose from {', '.join(HANDS)}")
+    total, start = len(cases(args.cases, seeds, hands)), time.perf_counter()
 
     def report(name: str, figures: dict[str, float]) -> None:
         print(row(name, figures), flush=True)
@@ -129,7 +141,7 @@ def main(argv: list[str] | None = None) -> None:
     reported: list[str] = []
     print(HEADER)
     results, stats = evaluate(args.cases, factory, robots.load(args.robot), report, seeds,
-                              passive_factory)  # fmt: skip
+                              passive_factory, hands)  # fmt: skip
     old = None
     if args.compare:
         with open(args.compare) as handle:

@@ -30,10 +30,11 @@ def test_band_covers_the_truth_and_is_narrow(case):
     result = run_case(case, "active", own)
     assert result.observer_coverage >= 0.9
     assert result.observer_std <= 0.3
-    # where the joint moves the estimate is within about 10 % of the peak (0.09–0.10 here);
-    # most of the error over the motion is where stiction holds a joint and its push unseen
+    # where the joint moves the estimate is within about 10 % of the peak (0.09–0.13 here);
+    # most of the error over the motion (more than half its mean square) is where stiction
+    # holds a joint and its push unseen
     assert result.observer_rms_moving <= 0.15
-    assert result.observer_rms_moving < 0.5 * result.observer_rms
+    assert result.observer_rms_moving < result.observer_rms / np.sqrt(2.0)
 
 
 def test_filter_covariance_is_the_wide_band_it_replaces():

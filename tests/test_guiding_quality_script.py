@@ -6,6 +6,8 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+import pytest
+
 import guiding_quality
 
 
@@ -22,3 +24,17 @@ def test_cases_guided_without_a_calibration_are_counted_and_named():
     line = guiding_quality.uncalibrated_line(results)
     assert line == "guided without a calibration: 1 of 2 cases (dry#9 relaxed sideways)"
     assert guiding_quality.uncalibrated_line({"x": {"calibrated": 1.0}}).endswith(": 0 of 1 cases")
+
+
+def test_other_hands_make_the_cases_and_an_unknown_one_is_a_one_line_error(capsys):
+    """``--hands soft,firm``: 100 and 1000 N/m on the lines, the circle with the first."""
+    from leadthrough.experiments.guiding import HANDS, cases
+
+    other = cases("full", (1,), ("soft", "firm"))
+    assert len(other) == 14 and {c.hand for c in other} == {"soft", "firm"}
+    assert [c.hand for c in other if c.path == "circle"] == ["soft", "soft"]
+    assert HANDS["soft"][0] == 100.0 and HANDS["firm"][0] == 1000.0
+    with pytest.raises(SystemExit):
+        guiding_quality.main(["--hands", "soft,gentle"])
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert error.endswith("unknown hand(s) gentle: choose from relaxed, stiff, soft, firm")

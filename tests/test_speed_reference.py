@@ -16,7 +16,10 @@ taken as known to the spread of units only (``unmeasured_friction_error``), then
 references re-anchored without taking up a joint's run (``admittance.reanchored``), then
 the calibration reading a joint only while it slides at the motion's pace
 (``calibration._JUMPING``), then the velocity reference of a lagging joint unwound
-towards its velocity (``admittance.unwound``). A faster step must reproduce them.
+towards its velocity (``admittance.unwound``), then the calibration measuring a joint's
+level only if it slid at pace long enough (``calibration._MEASURED``) and a payload only
+if it stands out of the model's gravity error (``CalibrationRun.payload``). A faster
+step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

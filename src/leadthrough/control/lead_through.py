@@ -380,7 +380,8 @@ class LeadThrough:
         q, qd = model.q, model.qd
         if self._calibration_run is None:
             self._calibration_run = CalibrationRun(self.dynamics, self.friction, q,
-                                                   self.parameters.calibration)  # fmt: skip
+                                                   self.parameters.calibration,
+                                                   self.parameters.gravity_uncertainty)  # fmt: skip
             self._calibration_start = t
         run, elapsed = self._calibration_run, t - self._calibration_start
         applied, _ = self._measured(tau_measured)
@@ -400,19 +401,20 @@ class LeadThrough:
             return
         robot = calibration.robot(self.robot)
         accuracy = self.parameters.calibration.friction_accuracy  # type: ignore[union-attr]
-        # the joints that slid: their friction level and gravity were measured; a joint
-        # that stiction held was not, so its level and all of its G may be off
+        # the joints that slid at pace long enough: their friction level and gravity were
+        # measured; on the others (stiction held them, or they stick-slipped) the level and
+        # all of G may be off
         n = self.robot.n_joints
-        slid = np.ones(n, bool) if calibration.measured is None else calibration.measured
-        measured = slid | self._identified
+        known = np.ones(n, bool) if calibration.measured is None else calibration.measured
+        measured = known | self._identified
         self._build(robot, calibration.friction(self.nominal_friction, accuracy), measured)
         # the gravity error measured at the pose goes into the model, as the payload does:
         # feed-forward, observer and supervisor all hold the arm with G(q) − bias
         self._gravity_correction = -np.asarray(calibration.bias, dtype=float)
-        # where the gravity is known: at the pose on the joints that slid (reference 0
+        # where the gravity is known: at the pose on the joints measured (reference 0
         # elsewhere)
         measured_gravity = self.dynamics.gravity(calibration.pose) - calibration.bias
-        self._gravity_reference = np.where(slid, measured_gravity, 0.0)
+        self._gravity_reference = np.where(known, measured_gravity, 0.0)
         self.law.model_error.calibrate(np.zeros(self.robot.n_joints), self._gravity_reference)
 
     def _control(

@@ -37,8 +37,13 @@ from leadthrough.twin.plants import sample_plant
 from leadthrough.twin.runner import SimulationResult, simulate
 from leadthrough.twin.simulator import DigitalTwin
 
-#: Hand impedances: (stiffness [N/m], damping [N s/m]).
-HANDS = {"relaxed": (300.0, 30.0), "stiff": (3000.0, 100.0)}
+#: Hand impedances: (stiffness [N/m], damping [N s/m]). The benchmark's two span the
+#: issue's relaxed and stiff hands; "soft" and "firm" fill the 100–3000 N/m a person
+#: spans, with the same damping ratio (damping ≈ 1.8 √stiffness).
+HANDS = {"relaxed": (300.0, 30.0), "stiff": (3000.0, 100.0), "soft": (100.0, 18.0),
+         "firm": (1000.0, 57.0)}  # fmt: skip
+#: The hands of the benchmark's cases (the circle takes the first).
+BENCHMARK_HANDS = ("relaxed", "stiff")
 #: Line displacements from the home flange position [m, world].
 LINES = {
     "sideways": (0.0, 0.2, 0.0),
@@ -65,7 +70,7 @@ class Case:
     Attributes:
         physics: Friction physics of the plant, ``"lugre"`` or ``"dry"``.
         seed: Plant seed.
-        hand: ``"relaxed"`` or ``"stiff"``.
+        hand: One of :data:`HANDS`.
         path: One of :data:`PATH_NAMES`.
     """
 
@@ -132,12 +137,17 @@ class CaseResult:
 DEVELOPMENT_SEEDS = (1, 2, 3, 4)
 
 
-def cases(kind: str = "full", seeds: Sequence[int] = DEVELOPMENT_SEEDS) -> list[Case]:
+def cases(
+    kind: str = "full",
+    seeds: Sequence[int] = DEVELOPMENT_SEEDS,
+    hands: Sequence[str] = BENCHMARK_HANDS,
+) -> list[Case]:
     """The benchmark's cases: ``"full"`` (14 per seed and physics) or ``"quick"`` (4).
 
     Args:
         kind: ``"full"`` or ``"quick"``.
         seeds: Plant seeds of the full set (default the development seeds, 56 cases).
+        hands: Hands of the full set's lines (:data:`HANDS`); the circle takes the first.
     """
     if kind == "quick":
         return [Case("dry", 1, "stiff", "sideways"), Case("dry", 2, "relaxed", "upwards"),
@@ -146,8 +156,8 @@ def cases(kind: str = "full", seeds: Sequence[int] = DEVELOPMENT_SEEDS) -> list[
     full = []
     for physics in ("dry", "lugre"):
         for seed in seeds:
-            full += [Case(physics, seed, hand, path) for hand in HANDS for path in LINES]
-            full.append(Case(physics, seed, "relaxed", "circle"))
+            full += [Case(physics, seed, hand, path) for hand in hands for path in LINES]
+            full.append(Case(physics, seed, hands[0], "circle"))
     return full
 
 
@@ -468,6 +478,7 @@ def evaluate(
     report: Callable[[str, dict[str, float]], None] | None = None,
     seeds: Sequence[int] = DEVELOPMENT_SEEDS,
     passive_factory: ControllerFactory | None = None,
+    hands: Sequence[str] = BENCHMARK_HANDS,
 ) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, float]]]:
     """Every case of ``cases(kind)``: default passive against the active controller.
 
@@ -481,6 +492,7 @@ def evaluate(
             excluded, to judge defaults on plants they were not developed on).
         passive_factory: Builds the passive controller, ``factory(robot, "passive")``;
             default :func:`default_factory`.
+        hands: Hands of the full set (:func:`cases`).
 
     Returns:
         The figures per case name (:func:`figures`) and their :func:`summary`.
@@ -490,7 +502,7 @@ def evaluate(
 
         robot = robots.yumi()
     results = {}
-    for case in cases(kind, seeds):
+    for case in cases(kind, seeds, hands):
         passive = run_case(case, "passive", passive_factory, robot=robot)
         active = run_case(case, "active", controller_factory, robot=robot)
         results[case.name] = figures(passive, active)

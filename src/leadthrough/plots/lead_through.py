@@ -111,7 +111,13 @@ def plot_calibration(checks: list[CalibrationCheck]) -> Figure:
         label = check.plant
         if check.true_payload or result.payload > 0.05:
             label += f" (payload {result.payload:.2f} kg, true {check.true_payload:.2f})"
-        left.plot(check.true_friction_scale, result.friction_scale, "o", label=label)
+        measured = (
+            np.ones_like(result.friction_scale, bool)
+            if result.measured is None
+            else result.measured
+        )
+        # a level not measured keeps the model's (scale 1): no measurement to compare
+        left.plot(check.true_friction_scale[measured], result.friction_scale[measured], "o")
         right.plot(check.true_gravity_error, result.gravity_error, "o", label=label)
     for axis, unit in ((left, "[–]"), (right, "[Nm]")):
         low, high = axis.get_xlim()
@@ -119,7 +125,7 @@ def plot_calibration(checks: list[CalibrationCheck]) -> Figure:
         axis.set_xlabel(f"true {unit}")
         axis.set_ylabel(f"measured {unit}")
         axis.grid(alpha=0.3)
-    left.set_title("Coulomb level over the model's, per joint")
+    left.set_title("Coulomb level over the model's, per joint measured")
     right.set_title("gravity error G_model − G_true, per joint")
     right.legend(fontsize=8)
     return figure
