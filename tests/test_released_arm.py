@@ -65,6 +65,14 @@ def _passive(cls=LeadThrough, calibrate=True, **changes):
     return factory
 
 
+def _runs_on_or_stops(result, runs_on: bool, beyond: float) -> None:
+    """Released, the arm runs on more than ``beyond`` [rad], or stops within 0.5 s and stays."""
+    if runs_on:
+        assert result.drift > beyond
+    else:
+        assert result.stop_time <= 0.5 and result.drift < 1e-3
+
+
 def _plain_payload_fit(self, gravity_error, per_kilogram, slid):
     """The previous payload: plain least squares on the joints that slid, ≥ 0."""
     fitted = np.where(slid, per_kilogram, 0.0)
@@ -314,10 +322,7 @@ def test_a_joint_running_ahead_of_its_references_is_braked_not_followed(cls, run
         return cls(robot, mode=mode, dt=0.004, parameters=parameters, calibrate=True)
 
     result = run_case(RUNS_AHEAD, "active", factory)
-    if runs:
-        assert result.drift > 0.5
-    else:
-        assert result.stop_time <= 0.5 and result.drift < 1e-3
+    _runs_on_or_stops(result, runs, beyond=0.5)
 
 
 @pytest.mark.parametrize("jumps_read", [False, True], ids=["paced", "jumps read"])
@@ -332,10 +337,7 @@ def test_a_calibration_that_reads_only_paced_sliding_lets_the_wrist_stop(jumps_r
     if jumps_read:
         monkeypatch.setattr(calibration, "_JUMPING", np.inf)
     result = run_case(JUMPS_READ, "active")
-    if jumps_read:
-        assert result.drift > 0.05
-    else:
-        assert result.stop_time <= 0.5 and result.drift < 1e-3
+    _runs_on_or_stops(result, jumps_read, beyond=0.05)
 
 
 @pytest.mark.parametrize("few_read", [False, True], ids=["measured", "a few readings read"])
@@ -349,10 +351,7 @@ def test_a_joint_the_calibration_read_only_a_few_times_keeps_its_level(few_read,
     if few_read:
         monkeypatch.setattr(calibration, "_MEASURED", 0.0)
     result = run_case(FEW_READINGS, "passive", _passive())
-    if few_read:
-        assert result.drift > 0.1
-    else:
-        assert result.stop_time <= 0.5 and result.drift < 1e-3
+    _runs_on_or_stops(result, few_read, beyond=0.1)
 
 
 @pytest.mark.parametrize("plain", [False, True], ids=["weighed", "plain fit"])
@@ -361,7 +360,4 @@ def test_a_payload_the_gravity_errors_do_not_show_stays_out_of_the_model(plain, 
     if plain:
         monkeypatch.setattr(calibration.CalibrationRun, "payload", _plain_payload_fit)
     result = run_case(SPURIOUS_PAYLOAD, "passive", _passive())
-    if plain:
-        assert result.drift > 0.1
-    else:
-        assert result.stop_time <= 0.5 and result.drift < 1e-3
+    _runs_on_or_stops(result, plain, beyond=0.1)
