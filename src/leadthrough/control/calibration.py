@@ -25,8 +25,10 @@ whole ``G`` uncertain, as without a calibration).
 
 The gravity error is explained first by a payload at the flange (a point mass ``m``,
 ``G_true = G_model + m · Y(q)`` with ``Y = −J_vᵀ g`` the gravity torque of one
-kilogram at the flange), fitted by least squares, so that it follows the arm to other
-poses; what remains is a bias at q₀. The Coulomb error rescales the friction model.
+kilogram at the flange), fitted by weighted least squares and taken only where it stands
+out of the gravity error the model may have anyway (:meth:`CalibrationRun.payload`), so
+that it follows the arm to other poses; what remains is a bias at q₀. The Coulomb error
+rescales the friction model.
 Results outside plausible bounds mean someone touched the arm: the calibration is
 refused (one line saying why) and the controller keeps its model.
 
