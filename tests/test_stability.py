@@ -67,12 +67,13 @@ def test_the_unwinding_counts_where_it_costs_damping():
     relaxing the reference towards the joint ten times faster than the velocity loop
     would leave less than the margin.
     """
-    robot, hand = lt.robots.yumi(), 3000.0
-    without = LeadThroughParameters(unwind_time=None)
-    always = loop_matrix(joint_loops(robot, LeadThroughParameters(), hand, 1.8 * np.sqrt(hand),
-                                     DT)[4], LeadThroughParameters(), DT, delay=1)  # fmt: skip
-    never = loop_matrix(joint_loops(robot, without, hand, 1.8 * np.sqrt(hand), DT)[4], without,
-                        DT, delay=1)  # fmt: skip
-    assert MARGIN <= least_damping(always, DT) < least_damping(never, DT)
+    robot, hand = lt.robots.yumi(), (3000.0, 1.8 * np.sqrt(3000.0))
+
+    def wrist_damping(parameters):  # joint 5's loop, one period of delay
+        loop = joint_loops(robot, parameters, *hand, DT)[4]
+        return least_damping(loop_matrix(loop, parameters, DT, delay=1), DT)
+
+    always, never = LeadThroughParameters(), LeadThroughParameters(unwind_time=None)
+    assert MARGIN <= wrist_damping(always) < wrist_damping(never)
     fast = LeadThroughParameters(unwind_time=0.005)
-    assert worst_damping(robot, fast, hand, 1.8 * np.sqrt(hand), DT) < MARGIN
+    assert worst_damping(robot, fast, *hand, DT) < MARGIN

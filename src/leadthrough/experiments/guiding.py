@@ -170,6 +170,15 @@ def case_path(robot: RobotDescription, name: str, start: FloatArray | None = Non
     return Line(start, start + np.array(LINES[name]), duration=LINE_DURATION)
 
 
+def _robot_or_yumi(robot: RobotDescription | None) -> RobotDescription:
+    """``robot``, or the shipped YuMi when None (the benchmark's arm)."""
+    if robot is None:
+        from leadthrough.model import robots
+
+        return robots.yumi()
+    return robot
+
+
 def default_factory(robot: RobotDescription, mode: str) -> LeadThrough:
     """What a user writes: ``LeadThrough(robot, mode=mode, dt=0.004, calibrate=True)``."""
     return LeadThrough(robot, mode=mode, dt=0.004, calibrate=True)  # type: ignore[arg-type]
@@ -250,10 +259,7 @@ def run_case(
     Returns:
         The figures of both runs (hold and release).
     """
-    if robot is None:
-        from leadthrough.model import robots
-
-        robot = robots.yumi()
+    robot = _robot_or_yumi(robot)
     factory = controller_factory or default_factory
     path = case_path(robot, case.path)
     held, recorder = _run(robot, case, mode, factory, np.inf, path.duration + HOLD)
@@ -295,8 +301,12 @@ def _calibrated(controller: Any) -> bool:
 
 def tool_vibration(velocity: FloatArray, dt: float) -> float:
     """RMS norm of the tool velocity above :data:`VIBRATION_CUTOFF` [m/s] (zero-phase)."""
-    high = _split(velocity, dt, "highpass")
-    return float(np.sqrt(np.mean(np.sum(high**2, axis=1))))
+    return _rms_norm(_split(velocity, dt, "highpass"))
+
+
+def _rms_norm(vectors: FloatArray) -> float:
+    """RMS over samples of the vectors' norm, ``√mean |v|²`` (rows: samples)."""
+    return float(np.sqrt(np.mean(np.sum(vectors**2, axis=1))))
 
 
 def vibration_windows(
@@ -311,18 +321,14 @@ def vibration_windows(
     The tool velocity above :data:`VIBRATION_CUTOFF` (as :func:`tool_vibration`, filtered
     over the whole run) in consecutive windows of ``window`` s from the grab on.
     """
-    if robot is None:
-        from leadthrough.model import robots
-
-        robot = robots.yumi()
+    robot = _robot_or_yumi(robot)
     path = case_path(robot, case.path)
     factory = controller_factory or default_factory
     held, _ = _run(robot, case, mode, factory, np.inf, path.duration + HOLD)
     dt = float(held.t[1] - held.t[0])
     high = _split(np.gradient(held.flange_position, dt, axis=0), dt, "highpass")
     starts = np.arange(0.0, held.t[-1], window)
-    rms = [np.sqrt(np.mean(np.sum(high[(held.t >= a) & (held.t < a + window)] ** 2, axis=1)))
-           for a in starts]  # fmt: skip
+    rms = [_rms_norm(high[(held.t >= a) & (held.t < a + window)]) for a in starts]
     return starts, np.array(rms)
 
 
@@ -497,10 +503,7 @@ def evaluate(
     Returns:
         The figures per case name (:func:`figures`) and their :func:`summary`.
     """
-    if robot is None:
-        from leadthrough.model import robots
-
-        robot = robots.yumi()
+    robot = _robot_or_yumi(robot)
     results = {}
     for case in cases(kind, seeds, hands):
         passive = run_case(case, "passive", passive_factory, robot=robot)
