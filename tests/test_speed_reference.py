@@ -18,8 +18,9 @@ the calibration reading a joint only while it slides at the motion's pace
 (``calibration._JUMPING``), then the velocity reference of a lagging joint unwound
 towards its velocity (``admittance.unwound``), then the calibration measuring a joint's
 level only if it slid at pace long enough (``calibration._MEASURED``) and a payload only
-if it stands out of the model's gravity error (``CalibrationRun.payload``). A faster
-step must reproduce them.
+if it stands out of the model's gravity error (``CalibrationRun.payload``), then the
+calibration sliding 10 mrad at 0.1 rad/s, above the Stribeck range (``CalibrationParameters``).
+A faster step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

@@ -73,7 +73,7 @@ class ObserverParameters:
             external torque's rate [Nm²/s³]: larger is faster and noisier. 1e3 with
             R = 1e-8 gives ≈ 18 Hz while moving (the default observer's ≈ 15 Hz); with the
             thesis' R = 1e-6 it gives ≈ 9 Hz, too slow for the start-up calibration's
-            5 mrad strokes (take 3e4 there: ≈ 15 Hz, std ≈ 0.7 Nm).
+            strokes of a few mrad (take 3e4 there: ≈ 15 Hz, std ≈ 0.7 Nm).
     """
 
     measurement_noise: float = 1e-6

@@ -1,0 +1,20 @@
+"""The start-up calibration's motion as it was, for tests that show cases found with it."""
+
+import dataclasses
+
+from leadthrough.control.calibration import CalibrationParameters
+
+#: Before: 5 mrad at 0.05 rad/s, inside the plants' Stribeck range, and a level refused
+#: outside 1 / 1.75–1.75× the model's.
+SLOW = {"stroke": 0.005, "speed": 0.05, "max_friction_change": 0.75}
+
+
+def slow_calibration_motion(monkeypatch) -> None:
+    """Every ``CalibrationParameters()`` built during the test moves as before (:data:`SLOW`).
+
+    The default calibration of ``LeadThroughParameters`` included, so a case runs through
+    the public API exactly as it did when it was found.
+    """
+    slow = CalibrationParameters(**SLOW)
+    defaults = tuple(getattr(slow, item.name) for item in dataclasses.fields(slow))
+    monkeypatch.setattr(CalibrationParameters.__init__, "__defaults__", defaults)
