@@ -233,10 +233,14 @@ class ActiveLaw:
         residual = dead_zone(estimate, 0.0, self.model_error.bias) - self._friction_margin(q, qd)
         residual = residual - p.drive_gain_uncertainty * self.feedback
         uncertainty = (self._rest_tolerance + self.model_error.tolerance(gravity)
-                       + self.friction.coulomb_uncertainty(qd, q))  # fmt: skip
+                       + self._coulomb_uncertainty(q, qd))  # fmt: skip
         self.weight = operator_weight(residual, uncertainty, p.assist_knee)
         self.drive = residual * self.weight
         self.residual, self.uncertainty = residual, uncertainty
+
+    def _coulomb_uncertainty(self, q: FloatArray, qd: FloatArray) -> FloatArray:
+        """What the friction model leaves open at (q̇, q) [Nm]: ≈ τ_C at rest, → 0 moving."""
+        return self.friction.coulomb_uncertainty(qd, q)
 
     def _friction_margin(self, q: FloatArray, qd: FloatArray) -> FloatArray:
         """The friction the model may overstate, along the motion [Nm].
