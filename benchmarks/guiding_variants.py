@@ -103,31 +103,20 @@ def long_stroke_trusted(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough
     return _build(robot, mode, calibration={**LONG_STROKE, "friction_accuracy": 0.1})
 
 
-class _NarrowedRestLaw(ActiveLaw):
-    """A resting joint's Coulomb uncertainty narrowed as the joints read together narrow it."""
+class _OwnRestBandLaw(ActiveLaw):
+    """Keeps each joint's whole Coulomb band: the fused std narrows nothing."""
 
-    compiled = False
-    narrowing: np.ndarray | None = None  # fused std / the joint's own std, ≤ 1
-
-    def _coulomb_uncertainty(self, q: Any, qd: Any) -> Any:
-        band = super()._coulomb_uncertainty(q, qd)
-        return band if self.narrowing is None else band * self.narrowing
+    def narrow(self, fused_std: Any, own_std: Any) -> None:
+        """Leave :attr:`narrowing` at ones."""
 
 
-class _NarrowedRest(lt.LeadThrough):
-    law_class = _NarrowedRestLaw
-
-    def _control(self, t: float, model: Any, tau_measured: Any) -> Any:
-        fusion = self.fusion
-        if fusion is not None and fusion.updated:  # the last period's fused std
-            own = np.maximum(self.joint_std, 1e-9)
-            self.law.narrowing = np.clip(fusion.std / own, 0.0, 1.0)  # type: ignore[attr-defined]
-        return super()._control(t, model, tau_measured)
+class _OwnRestBand(lt.LeadThrough):
+    law_class = _OwnRestBandLaw
 
 
-def narrowed_rest_uncertainty(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
-    """The law's Coulomb band of a resting joint times its fused std over its own."""
-    return _build(robot, mode, cls=_NarrowedRest)
+def own_rest_uncertainty(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """Each joint's whole Coulomb band in the law's uncertainty (before: not narrowed)."""
+    return _build(robot, mode, cls=_OwnRestBand)
 
 
 def strong_dither(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from calibration_motion import slow_calibration_motion
+from as_found import slow_calibration_motion
 from leadthrough.control.calibration import (
     CalibrationParameters,
     CalibrationRun,

@@ -41,7 +41,8 @@ def _law_run(robot: lt.RobotDescription, parameters: LeadThroughParameters, fric
 
     The pose wanders (and now and then jumps, so that tracking is lost) over the whole
     range and a little beyond (the limit zones, the end-stop reaction); the estimate is
-    quiet, a push, or a large one; G is random, M(q) the model's.
+    quiet, a push, or a large one; G is random, M(q) the model's; the fusion narrows the
+    Coulomb bands by random amounts (none, one period in seven).
     """
     rng = np.random.default_rng(seed)
     law = LeadThrough(robot, "active", friction=friction, parameters=parameters).law
@@ -65,6 +66,7 @@ def _law_run(robot: lt.RobotDescription, parameters: LeadThroughParameters, fric
         gravity = rng.normal(0.0, 20.0, n)
         constraint = rng.normal(0.0, 2.0, n) if k % 3 == 0 else np.zeros(n)
         mass = mass_of(np.clip(q, robot.q_min, robot.q_max))
+        law.narrowing[:] = 1.0 if k % 7 == 0 else rng.uniform(0.0, 1.0, n)  # the fused std's
         _law_period(law, compiled, q, qd, estimate, gravity, constraint, mass)
         rows.append(_state(law))
     return np.array(rows)

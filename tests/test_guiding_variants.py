@@ -18,7 +18,7 @@ FACTORIES = ("no_unwinding", "no_weighting", "full_residual", "long_stroke", "lo
              "strong_dither", "tool_wrench_prior", "smooth_rate_guiding",
              "no_friction_margin", "half_friction_margin",
              "three_quarter_friction_margin", "joint_estimates",
-             "plain_admittance", "narrowed_rest_uncertainty")  # fmt: skip
+             "plain_admittance", "own_rest_uncertainty")  # fmt: skip
 
 
 @pytest.fixture(scope="module")

@@ -19,8 +19,9 @@ the calibration reading a joint only while it slides at the motion's pace
 towards its velocity (``admittance.unwound``), then the calibration measuring a joint's
 level only if it slid at pace long enough (``calibration._MEASURED``) and a payload only
 if it stands out of the model's gravity error (``CalibrationRun.payload``), then the
-calibration sliding 10 mrad at 0.1 rad/s, above the Stribeck range (``CalibrationParameters``).
-A faster step must reproduce them.
+calibration sliding 10 mrad at 0.1 rad/s, above the Stribeck range (``CalibrationParameters``),
+then a resting joint's Coulomb band in the law narrowed by the joints read together
+(``ActiveLaw.narrow``). A faster step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

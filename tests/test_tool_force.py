@@ -118,6 +118,36 @@ def test_the_controller_reports_the_fusion_of_its_joints_estimates():
                               ToolForceParameters().force_std)  # fmt: skip
     np.testing.assert_allclose(controller.tau_ext_hat, expected[0], rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(controller.std, expected[1], rtol=1e-9, atol=1e-12)
+    narrowing = np.minimum(controller.std / controller.joint_std, 1.0)  # what the law uses
+    np.testing.assert_allclose(controller.law.narrowing, narrowing, rtol=1e-12)
+    assert np.min(narrowing) < 0.9  # at rest the joints read together narrow some bands
+
+
+def test_the_fused_std_narrows_a_resting_joints_coulomb_band_in_the_law():
+    """A push of half the breakaway on a resting joint: its band × fused / own std, never wider.
+
+    Alone, the joint's friction may hold that push unseen, so the law passes less than half
+    of it; read with the joints that determine it (fused std a fifth of its own), the
+    Coulomb band shrinks five-fold and the law passes more than 60 % of it. A fused std
+    above the joint's own widens nothing.
+    """
+    q, rest = ROBOT.home(), np.zeros(7)
+    gravity = DYNAMICS.gravity(q)
+    coulomb = lt.FrictionModel.from_robot(ROBOT).coulomb_uncertainty(rest, q)
+    push = 0.5 * coulomb
+    own = np.ones(7)
+    laws = {}
+    for name, fused in (("alone", own), ("narrowed", 0.2 * own), ("wider", 2.0 * own)):
+        laws[name] = law = lt.LeadThrough(ROBOT, "active", 0.004).law
+        law.narrow(fused, own)
+        law.operator_torque(push, q, rest, gravity)
+    alone, narrowed, wider = laws["alone"], laws["narrowed"], laws["wider"]
+    np.testing.assert_allclose(alone.narrowing, 1.0)
+    np.testing.assert_allclose(narrowed.uncertainty, alone.uncertainty - 0.8 * coulomb,
+                               rtol=1e-12)  # fmt: skip
+    np.testing.assert_array_equal(wider.uncertainty, alone.uncertainty)
+    assert np.all(alone.weight < 0.5) and np.all(narrowed.weight > 0.6)
+    assert np.all(alone.drive < 0.5 * push) and np.all(narrowed.drive > 0.6 * push)
 
 
 def test_guiding_the_fused_estimate_is_closer_to_the_truth_than_each_joints_own():

@@ -74,6 +74,8 @@ class ActiveLaw:
             [–] (:func:`~leadthrough.control.admittance.damping_weight`): sets D̃.
         feedback: The last tracking torque [Nm].
         references: The admittance's references (None until the first active period).
+        narrowing: What the joints read together leave of each joint's Coulomb
+            uncertainty [–], ≤ 1 (:meth:`narrow`; ones while each joint is read alone).
     """
 
     #: Run the law compiled (:mod:`leadthrough.control.fused`); False runs the readable
@@ -148,6 +150,24 @@ class ActiveLaw:
         self.references: AdmittanceState | None = None
         self._work = np.zeros((n, n + 1))  # the compiled admittance's scratch space
         self._sliding = np.zeros(n)  # the compiled sliding velocity
+        self.narrowing = np.ones(n)
+
+    def narrow(self, fused_std: FloatArray, own_std: FloatArray) -> None:
+        """Narrow each joint's Coulomb uncertainty as the joints read together do [–].
+
+        At rest friction may hold any push below breakaway unseen, so a joint's own
+        reading may miss up to ≈ τ_C of it; read with the other joints as one force at the
+        tool (:mod:`~leadthrough.estimation.tool_force`), its torque is known to the fused
+        std. The Coulomb band of :attr:`uncertainty` shrinks by the same ratio,
+        ``fused_std / own_std`` (at most 1): a resting joint whose push the moving joints
+        determine passes it, one they cannot see keeps its whole band.
+
+        Args:
+            fused_std: The fused estimate's std [Nm].
+            own_std: The joint's own estimate's std [Nm].
+        """
+        np.divide(fused_std, np.maximum(own_std, 1e-9), out=self.narrowing)
+        np.minimum(self.narrowing, 1.0, out=self.narrowing)
 
     def friction_terms(self, q: FloatArray, qd: FloatArray) -> FloatArray:
         """The friction model's terms at (q̇, q) for this period (``terms_into``), (4, n)."""
@@ -187,7 +207,8 @@ class ActiveLaw:
         self.friction_terms(q, qd)  # into the rows the compiled drive reads
         bias, (level, viscous, upper, lower) = self.model_error, self._term_rows
         bias.confidence = operator_drive(estimate, q, gravity, level, viscous, upper, lower,
-            self._joint_constants, self._drive_scalars, bias.bias, bias.gravity_learned,
+            self._joint_constants, self._drive_scalars, self.narrowing, bias.bias,
+            bias.gravity_learned,
             bias.confidence, self.weight, self.drive, self.feedback, self.residual,
             self.uncertainty)  # fmt: skip
         return self.drive
@@ -239,8 +260,11 @@ class ActiveLaw:
         self.residual, self.uncertainty = residual, uncertainty
 
     def _coulomb_uncertainty(self, q: FloatArray, qd: FloatArray) -> FloatArray:
-        """What the friction model leaves open at (q̇, q) [Nm]: ≈ τ_C at rest, → 0 moving."""
-        return self.friction.coulomb_uncertainty(qd, q)
+        """What the friction model leaves open at (q̇, q) [Nm]: ≈ τ_C at rest, → 0 moving.
+
+        Times :attr:`narrowing`: what reading the joints together leaves of it.
+        """
+        return self.friction.coulomb_uncertainty(qd, q) * self.narrowing
 
     def _friction_margin(self, q: FloatArray, qd: FloatArray) -> FloatArray:
         """The friction the model may overstate, along the motion [Nm].

@@ -50,8 +50,8 @@ ADMITTANCE_SCALARS = ("limit_aware", "reanchor_error", "damping_time", "rest_dam
 
 @kernel
 def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, scalars,
-                   bias, gravity_learned, confidence, weight, drive, feedback, residuals,
-                   uncertainty):  # fmt: skip
+                   narrowing, bias, gravity_learned, confidence, weight, drive, feedback,
+                   residuals, uncertainty):  # fmt: skip
     """One period of the operator torque, in place; returns the bias' new confidence.
 
     Args:
@@ -65,6 +65,8 @@ def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, sc
         lower: tanh(A (q̇ − B) / 2) [–].
         joint: Per-joint constants, rows :data:`JOINT_ROWS`.
         scalars: :data:`DRIVE_SCALARS`.
+        narrowing: What the joints read together leave of each joint's Coulomb
+            uncertainty [–] (``ActiveLaw.narrowing``).
         bias: The learned bias [Nm] (``ModelErrorBias.bias``), updated.
         gravity_learned: ``ModelErrorBias.gravity_learned`` [Nm], updated.
         confidence: The bias' confidence [–].
@@ -110,7 +112,7 @@ def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, sc
         unknown = abs(gravity[i])
         changed = abs(gravity[i] - gravity_learned[i])
         tolerance = gravity_uncertainty * ((1.0 - confidence) * unknown + confidence * changed)
-        spread = (joint[4, i] + tolerance) + half_level * (upper[i] - lower[i])
+        spread = (joint[4, i] + tolerance) + half_level * (upper[i] - lower[i]) * narrowing[i]
         residuals[i], uncertainty[i] = residual, spread
         if knee == 0.0:
             w = 1.0

@@ -430,7 +430,9 @@ class LeadThrough:
         estimate = self.observer.update(q, qd, applied - dither, model)
         if self.fusion is not None:
             self._stage = "tool force"
-            estimate = self.fusion.update(estimate, self.joint_std, model.tool_jacobian)
+            own_std = self.joint_std
+            estimate = self.fusion.update(estimate, own_std, model.tool_jacobian)
+            self.law.narrow(self.fusion.std, own_std)
         self._stage = "operator torque"
         self.law.operator_torque(estimate, q, qd, model.gravity)
         torque = feed_forward.total

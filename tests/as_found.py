@@ -1,7 +1,8 @@
-"""The start-up calibration's motion as it was, for tests that show cases found with it."""
+"""Defaults as they were, for tests that show cases found with them."""
 
 import dataclasses
 
+from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.calibration import CalibrationParameters
 
 #: Before: 5 mrad at 0.05 rad/s, inside the plants' Stribeck range, and a level refused
@@ -18,3 +19,8 @@ def slow_calibration_motion(monkeypatch) -> None:
     slow = CalibrationParameters(**SLOW)
     defaults = tuple(getattr(slow, item.name) for item in dataclasses.fields(slow))
     monkeypatch.setattr(CalibrationParameters.__init__, "__defaults__", defaults)
+
+
+def own_rest_bands(monkeypatch) -> None:
+    """Every active law keeps each joint's whole Coulomb band, as before ``ActiveLaw.narrow``."""
+    monkeypatch.setattr(ActiveLaw, "narrow", lambda law, fused_std, own_std: None)
