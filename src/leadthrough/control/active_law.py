@@ -6,7 +6,9 @@ Per period, after the observer (thesis §6.2, SPEC §6):
    while nobody guides is removed from ``τ̂_ext`` (it can silence a reading, never create
    one), and so is the friction the model may overstate, along the motion; what remains is
    weighed smoothly by how far it stands out of the model's own uncertainty (friction
-   error and noise, gravity error; :func:`~leadthrough.control.admittance.operator_weight`).
+   error and noise, gravity error; :func:`~leadthrough.control.admittance.operator_weight`),
+   a resting joint's friction band narrowed as far as the joints read together know its
+   push (:meth:`ActiveLaw.narrow`).
 2. :meth:`ActiveLaw.tracking`: the admittance model (virtual inertia k_M M(q) heavier than
    the arm, damping that rises once no push starts or sustains a joint's motion) turns
    that torque plus the virtual constraints' into references that stay clear of the
@@ -208,9 +210,8 @@ class ActiveLaw:
         bias, (level, viscous, upper, lower) = self.model_error, self._term_rows
         bias.confidence = operator_drive(estimate, q, gravity, level, viscous, upper, lower,
             self._joint_constants, self._drive_scalars, self.narrowing, bias.bias,
-            bias.gravity_learned,
-            bias.confidence, self.weight, self.drive, self.feedback, self.residual,
-            self.uncertainty)  # fmt: skip
+            bias.gravity_learned, bias.confidence, self.weight, self.drive, self.feedback,
+            self.residual, self.uncertainty)  # fmt: skip
         return self.drive
 
     def tracking(
