@@ -101,6 +101,21 @@ def test_compiled_law_equals_the_numpy_reference_over_random_periods(robot_name,
     np.testing.assert_allclose(compiled, reference, rtol=1e-9, atol=1e-9)
 
 
+def test_compiled_narrowing_equals_numpy_with_zeros_and_nans():
+    """``ActiveLaw.narrow`` compiled and in NumPy: equal bit for bit, NaN where NumPy's is."""
+    rng = np.random.default_rng(5)
+    laws = [LeadThrough(lt.robots.yumi(), "active").law for _ in range(2)]
+    laws[1].compiled = False
+    for k in range(2000):
+        fused, own = rng.uniform(0.0, 2.0, 7), rng.uniform(0.0, 2.0, 7)
+        own[k % 7] = (0.0, 1e-12, np.inf, np.nan, 1.0, -0.0, 3.0)[k % 7]
+        fused[(k + 3) % 7] = (0.0, np.nan, 5.0)[k % 3]
+        for law in laws:
+            law.narrow(fused, own)
+        np.testing.assert_array_equal(laws[0].narrowing, laws[1].narrowing)
+        assert np.all((laws[0].narrowing <= 1.0) | np.isnan(laws[0].narrowing))
+
+
 def test_a_nan_estimate_propagates_as_in_numpy():
     """A NaN estimate: the same NaNs, and the same numbers where NumPy keeps them."""
     robot = lt.robots.yumi()

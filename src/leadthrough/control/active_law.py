@@ -43,7 +43,12 @@ from leadthrough.control.admittance import (
     virtual_damping,
 )
 from leadthrough.control.bias import ModelErrorBias
-from leadthrough.control.fused import admittance_law, operator_drive, sliding_velocity
+from leadthrough.control.fused import (
+    admittance_law,
+    operator_drive,
+    rest_narrowing,
+    sliding_velocity,
+)
 from leadthrough.control.parameters import LeadThroughParameters
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
@@ -168,6 +173,9 @@ class ActiveLaw:
             fused_std: The fused estimate's std [Nm].
             own_std: The joint's own estimate's std [Nm].
         """
+        if self.compiled:
+            rest_narrowing(fused_std, own_std, self.narrowing)
+            return
         np.divide(fused_std, np.maximum(own_std, 1e-9), out=self.narrowing)
         np.minimum(self.narrowing, 1.0, out=self.narrowing)
 

@@ -1,12 +1,14 @@
 """The active law (:class:`~leadthrough.control.active_law.ActiveLaw`), compiled.
 
-Three kernels do, per joint and in one pass, what the readable NumPy code of the controller
+Four kernels do, per joint and in one pass, what the readable NumPy code of the controller
 does in some forty vector operations and a 7×7 solve (the reference, which the tests hold
 these to at 1e-9: one-ulp differences of the friction terms carried through the damping's
 average over 20 000 random periods):
 
 * :func:`sliding_velocity` is ``ActiveLaw.sliding_velocity``: the speed the law's
   friction sees, zero below ``rest_velocity``;
+* :func:`rest_narrowing` is ``ActiveLaw.narrow``: what the joints read together leave of
+  each joint's Coulomb uncertainty;
 * :func:`operator_drive` is ``ActiveLaw._update_drive``: learn the model-error bias
   (:class:`~leadthrough.control.bias.ModelErrorBias`), remove it through the dead-zone,
   remove the friction the model may overstate, weigh the residual by the model's own
@@ -124,6 +126,16 @@ def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, sc
         weight[i] = w
         drive[i] = residual * w
     return confidence
+
+
+@kernel
+def rest_narrowing(fused_std, own_std, out):
+    """``min(fused_std / max(own_std, 1e-9), 1)`` [–] into ``out`` (``ActiveLaw.narrow``)."""
+    for i in range(out.shape[0]):
+        own = own_std[i] if own_std[i] > 1e-9 or own_std[i] != own_std[i] else 1e-9
+        ratio = fused_std[i] / own
+        out[i] = ratio if ratio < 1.0 or ratio != ratio else 1.0
+    return out
 
 
 @kernel
