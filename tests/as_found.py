@@ -4,6 +4,7 @@ import dataclasses
 
 from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.calibration import CalibrationParameters
+from leadthrough.control.fused import JOINT_ROWS
 
 #: Before: 5 mrad at 0.05 rad/s, inside the plants' Stribeck range, and a level refused
 #: outside 1 / 1.75–1.75× the model's.
@@ -24,3 +25,18 @@ def slow_calibration_motion(monkeypatch) -> None:
 def own_rest_bands(monkeypatch) -> None:
     """Every active law keeps each joint's whole Coulomb band, as before ``ActiveLaw.narrow``."""
     monkeypatch.setattr(ActiveLaw, "narrow", lambda law, fused_std, own_std: None)
+
+
+def whole_friction_margin(monkeypatch) -> None:
+    """Every active law's friction margin removes the level's whole error.
+
+    As before its stiction share was left to the weight (``ActiveLaw.margin_error``).
+    """
+    use_friction = ActiveLaw.use_friction
+
+    def whole(law, friction, measured=None) -> None:
+        use_friction(law, friction, measured)
+        law.margin_error = law.friction_error
+        law._joint_constants[JOINT_ROWS.index("margin_error")] = law.friction_error
+
+    monkeypatch.setattr(ActiveLaw, "use_friction", whole)

@@ -17,7 +17,7 @@ import guiding_variants
 FACTORIES = ("no_unwinding", "no_weighting", "full_residual", "long_stroke", "long_stroke_trusted",
              "strong_dither", "tool_wrench_prior", "smooth_rate_guiding",
              "no_friction_margin", "half_friction_margin",
-             "three_quarter_friction_margin", "joint_estimates",
+             "three_quarter_friction_margin", "whole_friction_margin", "joint_estimates",
              "plain_admittance", "own_rest_uncertainty")  # fmt: skip
 
 
@@ -51,15 +51,34 @@ def test_a_variant_law_is_the_one_that_runs(robot, name):
         ("no_friction_margin", 0.0),
         ("half_friction_margin", 0.5),
         ("three_quarter_friction_margin", 0.75),
+        ("whole_friction_margin", 1.0),
     ],
 )
-def test_scaled_margin_is_that_share_of_the_default(robot, name, scale):
-    """The margin variants remove ``scale`` times the default law's friction margin."""
+def test_scaled_margin_is_that_share_of_the_whole_error(robot, name, scale):
+    """The margin variants remove ``scale`` times the level's whole error, compiled or not.
+
+    The default removes the error less the stiction share: ``(e − s) / e`` of the whole.
+    """
     q, qd = np.array(robot.home(), dtype=float), np.linspace(-0.3, 0.3, robot.n_joints)
-    default = lt.LeadThrough(robot, mode="active").law._friction_margin(q, qd)
+    law = lt.LeadThrough(robot, mode="active").law
+    default = law._friction_margin(q, qd)
     assert np.max(np.abs(default)) > 0.01
-    variant = getattr(guiding_variants, name)(robot, "active").law._friction_margin(q, qd)
-    np.testing.assert_allclose(variant, scale * default, rtol=1e-12, atol=1e-15)
+    whole = default * law.friction_error / law.margin_error
+    variant = getattr(guiding_variants, name)(robot, "active").law
+    np.testing.assert_allclose(variant._friction_margin(q, qd), scale * whole, rtol=1e-12,
+                               atol=1e-15)  # fmt: skip
+    sliding = law.sliding_velocity(qd).copy()  # the speed the law's friction sees
+    share = 1.0 - scale * law.friction_error / law.margin_error
+    expected = share * law._friction_margin(q, sliding)
+    compiled = _residual(variant, q, qd) - _residual(law, q, qd)  # the margins' difference
+    np.testing.assert_allclose(compiled, expected, rtol=1e-9, atol=1e-12)
+
+
+def _residual(law, q, qd):
+    """The compiled law's residual for a zero estimate at (q, q̇), gravity zero [Nm]."""
+    law.reset()
+    law.operator_torque(np.zeros(law.n), q, qd, np.zeros(law.n))
+    return law.residual.copy()
 
 
 @pytest.mark.parametrize("name", ("true_torque", "true_torque_plain"))

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from as_found import own_rest_bands, slow_calibration_motion
+from as_found import own_rest_bands, slow_calibration_motion, whole_friction_margin
 from leadthrough.control import active_law, calibration
 from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.admittance import AdmittanceState
@@ -320,11 +320,13 @@ def test_a_joint_running_ahead_of_its_references_is_braked_not_followed(cls, run
     damping, the one thing that brakes a joint the law reads no push on, went with it.
     The feed-forward error that drives the joint here is the calibration's reading of its
     jumps (counted again for this test; see the next one), and the references are not
-    unwound and each joint's Coulomb band is its own (as when the case was found).
+    unwound, each joint's Coulomb band is its own and the friction margin the level's whole
+    error (as when the case was found).
     """
     monkeypatch.setattr(calibration, "_JUMPING", np.inf)
     _calibration_of_the_time(monkeypatch)
     own_rest_bands(monkeypatch)
+    whole_friction_margin(monkeypatch)
 
     def factory(robot, mode):
         parameters = lt.LeadThroughParameters(unwind_time=None)

@@ -69,6 +69,8 @@ class ActiveLaw:
     Attributes:
         friction_error: Relative error of the friction levels in use, per joint [–] (the
             model's, or ``friction_uncertainty``; at least ``stiction_margin``).
+        margin_error: The part of it the friction margin removes [–]:
+            ``friction_error − stiction_margin`` (:meth:`_friction_margin`).
         model_error: The bias learned while nobody guides (and by the calibration).
         drive: Operator torque that drives the admittance [Nm].
         weight: Operator weight of every joint [–].
@@ -137,10 +139,13 @@ class ActiveLaw:
             relative = np.full(self.n, p.friction_uncertainty)
         relative = np.maximum(relative, p.stiction_margin)
         self.friction_error = relative
+        # the stiction share of the error is in the weight's scale (the rest tolerance):
+        # the margin takes the rest of it, so that no error is counted twice
+        self.margin_error = relative - p.stiction_margin
         self._friction_tolerance = relative * friction.coulomb + 2.0 * friction.noise_std
         self._rest_tolerance = p.stiction_margin * friction.coulomb + 2.0 * friction.noise_std
         self._joint_constants = np.array([self._friction_tolerance, self._reference_low,
-            self._reference_high, relative, self._rest_tolerance,
+            self._reference_high, self.margin_error, self._rest_tolerance,
             self._speed_cap])  # fused.JOINT_ROWS  # fmt: skip
 
     def reset(self) -> None:
@@ -278,15 +283,18 @@ class ActiveLaw:
     def _friction_margin(self, q: FloatArray, qd: FloatArray) -> FloatArray:
         """The friction the model may overstate, along the motion [Nm].
 
-        Removed from the estimate, it makes any friction error read as friction (against
-        the motion), never as a push along it: a released arm cannot run away on a model
+        Removed from the estimate, it makes a friction error read as friction (against
+        the motion), not as a push along it: a released arm cannot run away on a model
         whose friction is too high. Coulomb and viscous parts with the joint's
-        :attr:`friction_error` (a measured level's, or the spread of units where nothing
-        was measured).
+        :attr:`margin_error`: its :attr:`friction_error` (a measured level's, or the
+        spread of units where nothing was measured) less ``stiction_margin``, the share
+        the weight's scale already holds (the rest tolerance ``stiction_margin · τ_C``
+        is in :attr:`uncertainty` moving or not). Counted in both, that share made the
+        operator push it twice.
         """
         viscous = self.friction.viscous * qd
         coulomb = self.friction.mean(qd, q) - viscous
-        return self.friction_error * (coulomb + viscous)
+        return self.margin_error * (coulomb + viscous)
 
     def _admittance(
         self, q: FloatArray, qd: FloatArray, drive: FloatArray, mass: FloatArray,

@@ -35,9 +35,10 @@ import math
 from leadthrough.compiled import kernel
 
 #: Rows of the per-joint constants: the friction tolerance 2σ + relative τ_C, the low and
-#: high reference limits, the friction's relative error (Coulomb and viscous), the
-#: tolerance at rest and the speed cap of the references.
-JOINT_ROWS = ("friction_tolerance", "reference_low", "reference_high", "friction_relative",
+#: high reference limits, the relative error the friction margin removes (Coulomb and
+#: viscous; ``ActiveLaw.margin_error``), the tolerance at rest and the speed cap of the
+#: references.
+JOINT_ROWS = ("friction_tolerance", "reference_low", "reference_high", "margin_error",
               "rest_tolerance", "speed_cap")  # fmt: skip
 #: Scalars of :func:`operator_drive`, in order.
 DRIVE_SCALARS = ("gravity_uncertainty", "dt", "bias_time", "drive_gain_uncertainty",
