@@ -27,16 +27,16 @@ def own_rest_bands(monkeypatch) -> None:
     monkeypatch.setattr(ActiveLaw, "narrow", lambda law, fused_std, own_std: None)
 
 
-def whole_friction_margin(monkeypatch) -> None:
-    """Every active law's friction margin removes the level's whole error.
+def friction_margin_share(monkeypatch, share: float = 1.0) -> None:
+    """Every active law's friction margin removes ``share`` of the level's whole error.
 
-    As before its stiction share was left to the weight (``ActiveLaw.margin_error``).
+    1 as before its stiction share was left to the weight (``ActiveLaw.margin_error``).
     """
     use_friction = ActiveLaw.use_friction
 
-    def whole(law, friction, measured=None) -> None:
+    def scaled(law, friction, measured=None) -> None:
         use_friction(law, friction, measured)
-        law.margin_error = law.friction_error
-        law._joint_constants[JOINT_ROWS.index("margin_error")] = law.friction_error
+        law.margin_error = share * law.friction_error
+        law._joint_constants[JOINT_ROWS.index("margin_error")] = law.margin_error
 
-    monkeypatch.setattr(ActiveLaw, "use_friction", whole)
+    monkeypatch.setattr(ActiveLaw, "use_friction", scaled)
