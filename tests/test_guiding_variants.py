@@ -57,18 +57,24 @@ def test_a_variant_law_is_the_one_that_runs(robot, name):
 def test_scaled_margin_is_that_share_of_the_whole_error(robot, name, scale):
     """The margin variants remove ``scale`` times the level's whole error, compiled or not.
 
-    The default removes the error less the stiction share: ``(e − s) / e`` of the whole.
+    The default removes a measured level's error less its stiction share (0.05), an
+    unmeasured one's whole.
     """
     q, qd = np.array(robot.home(), dtype=float), np.linspace(-0.3, 0.3, robot.n_joints)
+    measured = np.arange(robot.n_joints) % 2 == 0
     law = lt.LeadThrough(robot, mode="active").law
+    variant = getattr(guiding_variants, name)(robot, "active").law
+    for each in (law, variant):
+        each.use_friction(each.friction, measured)
+    error = law.friction_error
+    np.testing.assert_allclose(law.margin_error, np.where(measured, error - 0.05, error))
     default = law._friction_margin(q, qd)
     assert np.max(np.abs(default)) > 0.01
-    whole = default * law.friction_error / law.margin_error
-    variant = getattr(guiding_variants, name)(robot, "active").law
+    whole = default * error / law.margin_error
     np.testing.assert_allclose(variant._friction_margin(q, qd), scale * whole, rtol=1e-12,
                                atol=1e-15)  # fmt: skip
     sliding = law.sliding_velocity(qd).copy()  # the speed the law's friction sees
-    share = 1.0 - scale * law.friction_error / law.margin_error
+    share = 1.0 - scale * error / law.margin_error
     expected = share * law._friction_margin(q, sliding)
     compiled = _residual(variant, q, qd) - _residual(law, q, qd)  # the margins' difference
     np.testing.assert_allclose(compiled, expected, rtol=1e-9, atol=1e-12)
