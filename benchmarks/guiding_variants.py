@@ -194,8 +194,9 @@ def tool_wrench_prior(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
 def _scaled_margin(scale: float) -> Callable[[lt.RobotDescription, str], lt.LeadThrough]:
     """A factory whose law removes ``scale`` times the whole friction error of the level.
 
-    The default removes ``friction_error − stiction_margin`` (``ActiveLaw.margin_error``),
-    0.15 of τ_C on a calibrated joint: ¾ of the whole error. This runs compiled.
+    The default removes ``friction_error − stiction_margin`` on a joint whose level was
+    measured (``ActiveLaw.margin_error``; 0.15 after the calibration, ¾ of the whole error)
+    and the whole error elsewhere. This runs compiled.
     """
 
     class _ScaledMarginLaw(ActiveLaw):

@@ -1,9 +1,10 @@
 """What the friction margin buys and costs: effort against released-arm drift (issue 13).
 
 The active law removes the friction the model may overstate from the operator torque, so
-that a released arm cannot run away on a model whose friction is too high: the level's
-relative error less its stiction share, which the weight already holds (0.15 of τ_C after
-the start-up calibration, ¾ of the whole error). This runs the guiding benchmark's 56
+that a released arm cannot run away on a model whose friction is too high: a measured
+level's relative error less its stiction share, which the weight already holds (0.15 after
+the start-up calibration, ¾ of the whole error; an unmeasured level's whole error). This
+runs the guiding benchmark's 56
 cases (:mod:`leadthrough.experiments.guiding`) with the margin at 1, the default, ½ and 0
 of the whole error (``guiding_variants``) and draws the median and worst effort (active /
 passive) and the worst drift of a released active arm over 10 s against it, with the 1 mrad
