@@ -192,11 +192,9 @@ def tool_wrench_prior(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
 
 
 def _scaled_margin(scale: float) -> Callable[[lt.RobotDescription, str], lt.LeadThrough]:
-    """A factory whose law removes ``scale`` times the whole friction error of the level.
+    """A factory whose law removes ``scale`` times the level's whole error (the default's).
 
-    The default removes ``friction_error − stiction_margin`` on a joint whose level was
-    measured (``ActiveLaw.margin_error``; 0.15 after the calibration, ¾ of the whole error)
-    and the whole error elsewhere. This runs compiled.
+    It sets ``ActiveLaw.margin_error``, which the compiled law reads too.
     """
 
     class _ScaledMarginLaw(ActiveLaw):
@@ -215,9 +213,7 @@ def _scaled_margin(scale: float) -> Callable[[lt.RobotDescription, str], lt.Lead
     return factory
 
 
-#: The friction margin at a share of the level's whole error: what lightness it costs.
-#: The whole error was the default until the stiction share was taken out of it.
-whole_friction_margin = _scaled_margin(1.0)
+#: The friction margin the released arm needs, scaled down: how much lightness it costs.
 no_friction_margin = _scaled_margin(0.0)
 half_friction_margin = _scaled_margin(0.5)
 three_quarter_friction_margin = _scaled_margin(0.75)

@@ -30,7 +30,7 @@ def own_rest_bands(monkeypatch) -> None:
 def friction_margin_share(monkeypatch, share: float = 1.0) -> None:
     """Every active law's friction margin removes ``share`` of the level's whole error.
 
-    1 as before its stiction share was left to the weight (``ActiveLaw.margin_error``).
+    The default removes all of it (``ActiveLaw.margin_error``); 0 removes none.
     """
     use_friction = ActiveLaw.use_friction
 

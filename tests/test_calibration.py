@@ -114,8 +114,7 @@ def test_a_level_nothing_measured_carries_the_unit_spread(yumi):
     A joint the calibration could not slide keeps 0.35; the Coulomb compensation's ceiling
     uses the same errors; ``unmeasured_friction_error = 0`` trusts the model's own, and a
     model given to the controller (identified on this arm) keeps its own. The friction
-    margin takes a measured level's error less ``stiction_margin`` (0.05), the others'
-    whole.
+    margin takes each whole error.
     """
     plant = sample_plant(yumi, 1, "dry")  # stiction holds joint 3 in its calibration
     controller = LeadThrough(yumi, calibrate=True)
@@ -127,8 +126,7 @@ def test_a_level_nothing_measured_carries_the_unit_spread(yumi):
     np.testing.assert_array_equal(
         controller.feed_forward.friction_error, controller.law.friction_error
     )
-    # the margin takes a measured level's error less its stiction share (the weight's)
-    np.testing.assert_allclose(controller.law.margin_error, np.where(measured, 0.15, 0.35))
+    np.testing.assert_array_equal(controller.law.margin_error, controller.law.friction_error)
     controller.set_payload(0.1)  # a new model, the same knowledge of the friction
     np.testing.assert_allclose(controller.law.friction_error, np.where(measured, 0.2, 0.35))
     trusting = LeadThroughParameters(unmeasured_friction_error=0.0)
@@ -136,7 +134,7 @@ def test_a_level_nothing_measured_carries_the_unit_spread(yumi):
     identified = dataclasses.replace(FrictionModel.from_robot(yumi), relative_error=np.full(7, 0.1))
     identified_law = LeadThrough(yumi, friction=identified).law
     np.testing.assert_allclose(identified_law.friction_error, 0.1)
-    np.testing.assert_allclose(identified_law.margin_error, 0.05)
+    np.testing.assert_allclose(identified_law.margin_error, 0.1)
 
 
 def test_a_payload_is_taken_only_where_it_stands_out_of_the_models_gravity_error(yumi):

@@ -17,7 +17,7 @@ import guiding_variants
 FACTORIES = ("no_unwinding", "no_weighting", "full_residual", "long_stroke", "long_stroke_trusted",
              "strong_dither", "tool_wrench_prior", "smooth_rate_guiding",
              "no_friction_margin", "half_friction_margin",
-             "three_quarter_friction_margin", "whole_friction_margin", "joint_estimates",
+             "three_quarter_friction_margin", "joint_estimates",
              "plain_admittance", "own_rest_uncertainty")  # fmt: skip
 
 
@@ -51,31 +51,23 @@ def test_a_variant_law_is_the_one_that_runs(robot, name):
         ("no_friction_margin", 0.0),
         ("half_friction_margin", 0.5),
         ("three_quarter_friction_margin", 0.75),
-        ("whole_friction_margin", 1.0),
     ],
 )
-def test_scaled_margin_is_that_share_of_the_whole_error(robot, name, scale):
-    """The margin variants remove ``scale`` times the level's whole error, compiled or not.
-
-    The default removes a measured level's error less its stiction share (0.05), an
-    unmeasured one's whole.
-    """
+def test_scaled_margin_is_that_share_of_the_default(robot, name, scale):
+    """The margin variants remove ``scale`` times the default's margin, compiled or not."""
     q, qd = np.array(robot.home(), dtype=float), np.linspace(-0.3, 0.3, robot.n_joints)
-    measured = np.arange(robot.n_joints) % 2 == 0
+    measured = np.arange(robot.n_joints) % 2 == 0  # measured or not: the whole error
     law = lt.LeadThrough(robot, mode="active").law
     variant = getattr(guiding_variants, name)(robot, "active").law
     for each in (law, variant):
         each.use_friction(each.friction, measured)
-    error = law.friction_error
-    np.testing.assert_allclose(law.margin_error, np.where(measured, error - 0.05, error))
+    np.testing.assert_array_equal(law.margin_error, law.friction_error)
     default = law._friction_margin(q, qd)
     assert np.max(np.abs(default)) > 0.01
-    whole = default * error / law.margin_error
-    np.testing.assert_allclose(variant._friction_margin(q, qd), scale * whole, rtol=1e-12,
+    np.testing.assert_allclose(variant._friction_margin(q, qd), scale * default, rtol=1e-12,
                                atol=1e-15)  # fmt: skip
     sliding = law.sliding_velocity(qd).copy()  # the speed the law's friction sees
-    share = 1.0 - scale * error / law.margin_error
-    expected = share * law._friction_margin(q, sliding)
+    expected = (1.0 - scale) * law._friction_margin(q, sliding)
     compiled = _residual(variant, q, qd) - _residual(law, q, qd)  # the margins' difference
     np.testing.assert_allclose(compiled, expected, rtol=1e-9, atol=1e-12)
 

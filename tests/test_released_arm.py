@@ -326,13 +326,11 @@ def test_a_joint_running_ahead_of_its_references_is_braked_not_followed(cls, run
     damping, the one thing that brakes a joint the law reads no push on, went with it.
     The feed-forward error that drives the joint here is the calibration's reading of its
     jumps (counted again for this test; see the next one), and the references are not
-    unwound, each joint's Coulomb band is its own and the friction margin the level's whole
-    error (as when the case was found).
+    unwound and each joint's Coulomb band is its own (as when the case was found).
     """
     monkeypatch.setattr(calibration, "_JUMPING", np.inf)
     _calibration_of_the_time(monkeypatch)
     own_rest_bands(monkeypatch)
-    friction_margin_share(monkeypatch)
 
     def factory(robot, mode):
         parameters = lt.LeadThroughParameters(unwind_time=None)
@@ -399,10 +397,9 @@ def test_a_calibration_that_slides_above_the_stribeck_range_lets_the_arm_stop(sl
 def test_a_model_that_overstates_every_level_by_its_whole_error_stops(share, runs, monkeypatch):
     """Every level of dry #1 0.8 of a model measured on this arm to ±0.2: the arm stops.
 
-    The margin takes the measured level's error less its stiction share (0.15 of the
-    model's friction) and the weight holds the rest; without the margin the estimate reads
-    the friction the model overstates as a push along the motion and the released arm
-    runs on (320 mrad when this was written).
+    The margin takes the measured level's whole error (0.2 of the model's friction);
+    without it the estimate reads the friction the model overstates as a push along the
+    motion and the released arm runs on (320 mrad when this was written).
     """
     monkeypatch.setattr(guiding, "sample_plant", lambda robot, seed, physics:
                         sample_plant(robot, seed, physics, OVERSTATED))  # fmt: skip

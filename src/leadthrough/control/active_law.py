@@ -69,9 +69,8 @@ class ActiveLaw:
     Attributes:
         friction_error: Relative error of the friction levels in use, per joint [–] (the
             model's, or ``friction_uncertainty``; at least ``stiction_margin``).
-        margin_error: The part of it the friction margin removes [–]
-            (:meth:`_friction_margin`): ``friction_error − stiction_margin`` on a joint
-            whose level was measured on this arm, the whole ``friction_error`` elsewhere.
+        margin_error: The relative error the friction margin removes [–]
+            (:meth:`_friction_margin`): the whole :attr:`friction_error`.
         model_error: The bias learned while nobody guides (and by the calibration).
         drive: Operator torque that drives the admittance [Nm].
         weight: Operator weight of every joint [–].
@@ -140,10 +139,9 @@ class ActiveLaw:
             relative = np.full(self.n, p.friction_uncertainty)
         relative = np.maximum(relative, p.stiction_margin)
         self.friction_error = relative
-        # a measured level's error includes the stiction share, which the weight's scale
-        # holds (the rest tolerance): the margin takes the rest, no error counted twice
-        known = np.zeros(self.n, bool) if measured is None else np.asarray(measured, bool)
-        self.margin_error = np.where(known, relative - p.stiction_margin, relative)
+        # the whole error: the weight's scale is soft (a residual of its size passes 0.8 of
+        # itself), so no share of the error may be left to it (README: the margin)
+        self.margin_error = relative
         self._friction_tolerance = relative * friction.coulomb + 2.0 * friction.noise_std
         self._rest_tolerance = p.stiction_margin * friction.coulomb + 2.0 * friction.noise_std
         self._joint_constants = np.array([self._friction_tolerance, self._reference_low,
@@ -288,14 +286,11 @@ class ActiveLaw:
         Removed from the estimate, it makes a friction error read as friction (against
         the motion), not as a push along it: a released arm cannot run away on a model
         whose friction is too high. Coulomb and viscous parts with the joint's
-        :attr:`margin_error`. Where nothing measured the level, that is its
-        :attr:`friction_error`, the spread of Coulomb levels between units. A level
-        measured on this arm carries the measurement's error away from its pose *and
-        speed* (``CalibrationParameters.friction_accuracy``), the stiction and Stribeck
-        share ``stiction_margin`` included; the weight's scale holds that share already
-        (the rest tolerance ``stiction_margin · τ_C`` is in :attr:`uncertainty`, moving
-        or not), so the margin takes the error less it. Counted in both, that share
-        made the operator push it twice.
+        :attr:`margin_error`, its whole :attr:`friction_error` (a measured level's, or the
+        spread of units where nothing was measured). A measured level's error includes
+        the stiction share ``stiction_margin`` that the weight's scale holds too, but the
+        weight is soft: taking that share off the margin left a released arm a push of
+        up to 0.8 of it, and just beyond the plant family two of 24 ran on (README).
         """
         viscous = self.friction.viscous * qd
         coulomb = self.friction.mean(qd, q) - viscous

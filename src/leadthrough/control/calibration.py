@@ -127,8 +127,7 @@ class CalibrationParameters:
             the joints that slid. A 10 mrad stroke sees neither the position
             dependence (±15 % on the plants of ``benchmarks/guiding_quality.py``) nor the
             Stribeck curve: with 0.1 released arms crept up to 349 mrad there, with 0.2
-            at most 21 mrad. The active law's friction margin takes this less
-            ``LeadThroughParameters.stiction_margin`` (``ActiveLaw.margin_error``).
+            at most 21 mrad.
     """
 
     stroke: float = 0.01

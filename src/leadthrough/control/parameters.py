@@ -104,8 +104,7 @@ class LeadThroughParameters:
             lagging signal oscillates.
         stiction_margin: Relative Coulomb error at rest that no sigmoid model describes
             (stiction, Stribeck) [–]; part of what the model may read without an operator,
-            and the smallest friction error assumed. Part of a measured level's error
-            too, which the friction margin leaves to the weight (``ActiveLaw.margin_error``).
+            and the smallest friction error assumed.
         mass_uncertainty: Relative error of the link masses [–]; with the drive gains', the
             gravity error the model may read without an operator
             (:attr:`gravity_uncertainty`). The Coulomb compensation stays below
