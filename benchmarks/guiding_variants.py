@@ -24,7 +24,6 @@ import leadthrough as lt
 from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.admittance import operator_weight
 from leadthrough.control.calibration import CalibrationParameters
-from leadthrough.control.fused import JOINT_ROWS
 from leadthrough.estimation.observer import MomentumObserver, ObserverParameters
 from observer_variants import SMOOTH_RATE
 
@@ -194,14 +193,11 @@ def tool_wrench_prior(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
 def _scaled_margin(scale: float) -> Callable[[lt.RobotDescription, str], lt.LeadThrough]:
     """A factory whose law removes ``scale`` times the level's whole error (the default's).
 
-    It sets ``ActiveLaw.margin_error``, which the compiled law reads too.
+    It sets ``ActiveLaw.margin_share``, which the compiled law reads too.
     """
 
     class _ScaledMarginLaw(ActiveLaw):
-        def use_friction(self, friction: Any, measured: Any = None) -> None:
-            super().use_friction(friction, measured)
-            self.margin_error = scale * self.friction_error
-            self._joint_constants[JOINT_ROWS.index("margin_error")] = self.margin_error
+        margin_share = scale
 
     class _ScaledMargin(lt.LeadThrough):
         law_class = _ScaledMarginLaw

@@ -4,7 +4,6 @@ import dataclasses
 
 from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.calibration import CalibrationParameters
-from leadthrough.control.fused import JOINT_ROWS
 
 #: Before: 5 mrad at 0.05 rad/s, inside the plants' Stribeck range, and a level refused
 #: outside 1 / 1.75–1.75× the model's.
@@ -30,13 +29,6 @@ def own_rest_bands(monkeypatch) -> None:
 def friction_margin_share(monkeypatch, share: float = 1.0) -> None:
     """Every active law's friction margin removes ``share`` of the level's whole error.
 
-    The default removes all of it (``ActiveLaw.margin_error``); 0 removes none.
+    The default removes all of it (``ActiveLaw.margin_share``); 0 removes none.
     """
-    use_friction = ActiveLaw.use_friction
-
-    def scaled(law, friction, measured=None) -> None:
-        use_friction(law, friction, measured)
-        law.margin_error = share * law.friction_error
-        law._joint_constants[JOINT_ROWS.index("margin_error")] = law.margin_error
-
-    monkeypatch.setattr(ActiveLaw, "use_friction", scaled)
+    monkeypatch.setattr(ActiveLaw, "margin_share", share)

@@ -70,7 +70,7 @@ class ActiveLaw:
         friction_error: Relative error of the friction levels in use, per joint [–] (the
             model's, or ``friction_uncertainty``; at least ``stiction_margin``).
         margin_error: The relative error the friction margin removes [–]
-            (:meth:`_friction_margin`): the whole :attr:`friction_error`.
+            (:meth:`_friction_margin`): :attr:`margin_share` of :attr:`friction_error`.
         model_error: The bias learned while nobody guides (and by the calibration).
         drive: Operator torque that drives the admittance [Nm].
         weight: Operator weight of every joint [–].
@@ -90,6 +90,11 @@ class ActiveLaw:
     #: Run the law compiled (:mod:`leadthrough.control.fused`); False runs the readable
     #: NumPy reference (:meth:`_update_drive`, :meth:`_admittance`).
     compiled = True
+    #: Share of the level's error the friction margin removes (:attr:`margin_error`): all
+    #: of it. The weight's scale is soft (a residual of its size passes 0.8 of itself), so
+    #: no share may be left to it: with ¾, just beyond the plant family, released arms ran
+    #: on (README). Experiments set less on a subclass.
+    margin_share = 1.0
 
     def __init__(
         self,
@@ -139,9 +144,7 @@ class ActiveLaw:
             relative = np.full(self.n, p.friction_uncertainty)
         relative = np.maximum(relative, p.stiction_margin)
         self.friction_error = relative
-        # the whole error: the weight's scale is soft (a residual of its size passes 0.8 of
-        # itself), so no share of the error may be left to it (README: the margin)
-        self.margin_error = relative
+        self.margin_error = self.margin_share * relative
         self._friction_tolerance = relative * friction.coulomb + 2.0 * friction.noise_std
         self._rest_tolerance = p.stiction_margin * friction.coulomb + 2.0 * friction.noise_std
         self._joint_constants = np.array([self._friction_tolerance, self._reference_low,
@@ -286,11 +289,8 @@ class ActiveLaw:
         Removed from the estimate, it makes a friction error read as friction (against
         the motion), not as a push along it: a released arm cannot run away on a model
         whose friction is too high. Coulomb and viscous parts with the joint's
-        :attr:`margin_error`, its whole :attr:`friction_error` (a measured level's, or the
-        spread of units where nothing was measured). A measured level's error includes
-        the stiction share ``stiction_margin`` that the weight's scale holds too, but the
-        weight is soft: taking that share off the margin left a released arm a push of
-        up to 0.8 of it, and just beyond the plant family two of 24 ran on (README).
+        :attr:`margin_error`, the whole :attr:`friction_error` (a measured level's, or the
+        spread of units where nothing was measured; :attr:`margin_share`).
         """
         viscous = self.friction.viscous * qd
         coulomb = self.friction.mean(qd, q) - viscous
