@@ -19,6 +19,8 @@ Usage:
         [--robot NAME] [--seeds 5-8]  (another arm; plants not developed on)
         [--hands soft,firm]           (other hands of guiding.HANDS: 100 and 1000 N/m)
         [--uncalibrated]              (both modes without the start-up calibration)
+        [--position-amplitude 0.25]   (a wider family: dry friction ±25 % along the travel)
+        [--friction-scale 0.7,1.3]    (a wider family: levels 0.7–1.3 of the nominal)
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ import importlib
 import json
 import sys
 import time
+from dataclasses import asdict, replace
 
 from leadthrough.experiments.guiding import (
     BENCHMARK_HANDS,
@@ -39,6 +42,7 @@ from leadthrough.experiments.guiding import (
     uncalibrated_factory,
 )
 from leadthrough.model import robots
+from leadthrough.twin.plants import PlantRanges
 
 HEADER = (f"{'case':<30}{'effort a/p':>11}{'vib a/p':>9}{'speed p|a':>12}"
           f"{'resid p|a N':>13}{'stop p|a s':>11}{'drift p|a mrad':>15}{'obs rms':>8}{'cov':>6}"
@@ -92,6 +96,30 @@ def parse_seeds(text: str) -> list[int]:
     return seeds
 
 
+def plant_ranges(position_amplitude: float | None, friction_scale: str | None) -> PlantRanges:
+    """The plant family: :class:`PlantRanges` with the options given replacing its ranges.
+
+    Raises:
+        ValueError: An amplitude outside [0, 1) or a scale that is not ``LOW,HIGH`` with
+            0 < LOW ≤ HIGH (the message names the option).
+    """
+    ranges = PlantRanges()
+    if position_amplitude is not None:
+        if not 0.0 <= position_amplitude < 1.0:
+            raise ValueError(f"--position-amplitude must be in [0, 1), got {position_amplitude}")
+        ranges = replace(ranges, position_amplitude=position_amplitude)
+    if friction_scale is not None:
+        try:
+            low, high = (float(x) for x in friction_scale.split(","))
+        except ValueError:
+            low = high = float("nan")
+        if not 0.0 < low <= high:
+            raise ValueError(f"--friction-scale must be LOW,HIGH with 0 < LOW <= HIGH, "
+                             f"got {friction_scale!r}")  # fmt: skip
+        ranges = replace(ranges, friction_scale=(low, high))
+    return ranges
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", choices=("full", "quick"), default="full")
@@ -113,6 +141,18 @@ def main(argv: list[str] | None = None) -> None:
         help=f"hands of the full set, from {', '.join(HANDS)} (default "
         f"{','.join(BENCHMARK_HANDS)}; the circle takes the first)",
     )
+    parser.add_argument(
+        "--position-amplitude",
+        type=float,
+        help=f"relative dry-friction level change along the travel (default "
+        f"{PlantRanges().position_amplitude}: a larger one is a family the defaults were not "
+        "developed on)",
+    )
+    parser.add_argument(
+        "--friction-scale",
+        help="range of the plants' friction levels over the nominal, LOW,HIGH (default "
+        f"{','.join(str(x) for x in PlantRanges().friction_scale)})",
+    )
     parser.add_argument("--save", help="write the per-case figures and the summary to JSON")
     parser.add_argument("--compare", help="a JSON saved before: print its summary alongside")
     parser.add_argument(
@@ -129,7 +169,11 @@ def main(argv: list[str] | None = None) -> None:
     unknown = sorted(set(hands) - set(HANDS))
     if unknown:
         parser.error(f"unknown hand(s) {', '.join(unknown)}: choose from {', '.join(HANDS)}")
-    total, start = len(cases(args.cases, seeds, hands)), time.perf_counter()
+    try:
+        ranges = plant_ranges(args.position_amplitude, args.friction_scale)
+    except ValueError as error:
+        parser.error(str(error))
+    total, start = len(cases(args.cases, seeds, hands, ranges)), time.perf_counter()
 
     def report(name: str, figures: dict[str, float]) -> None:
         print(row(name, figures), flush=True)
@@ -141,7 +185,7 @@ def main(argv: list[str] | None = None) -> None:
     reported: list[str] = []
     print(HEADER)
     results, stats = evaluate(args.cases, factory, robots.load(args.robot), report, seeds,
-                              passive_factory, hands)  # fmt: skip
+                              passive_factory, hands, ranges)  # fmt: skip
     old = None
     if args.compare:
         with open(args.compare) as handle:
@@ -150,7 +194,8 @@ def main(argv: list[str] | None = None) -> None:
     print(uncalibrated_line(results))
     if args.save:
         with open(args.save, "w") as handle:
-            json.dump({"cases": results, "summary": stats}, handle, indent=1)
+            json.dump({"cases": results, "summary": stats, "family": asdict(ranges)}, handle,
+                      indent=1)  # fmt: skip
         print(f"saved {args.save}")
 
 

@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+import numpy as np
 import pytest
 
 import guiding_quality
@@ -38,3 +39,28 @@ def test_other_hands_make_the_cases_and_an_unknown_one_is_a_one_line_error(capsy
         guiding_quality.main(["--hands", "soft,gentle"])
     error = capsys.readouterr().err.strip().splitlines()[-1]
     assert error.endswith("unknown hand(s) gentle: choose from relaxed, stiff, soft, firm")
+
+
+def test_a_wider_plant_family_reaches_every_case_and_a_bad_range_is_a_one_line_error(capsys):
+    """``--position-amplitude 0.25 --friction-scale 0.7,1.3``: every case's plant drawn wider."""
+    from leadthrough.experiments.guiding import cases
+    from leadthrough.model import robots
+    from leadthrough.twin.plants import PlantRanges, sample_plant
+
+    wide = guiding_quality.plant_ranges(0.25, "0.7,1.3")
+    assert wide == PlantRanges(position_amplitude=0.25, friction_scale=(0.7, 1.3))
+    assert guiding_quality.plant_ranges(None, None) == PlantRanges()
+    every = cases("full", (1,), ranges=wide) + cases("quick", ranges=wide)
+    assert {c.ranges for c in every} == {wide}
+    yumi = robots.yumi()
+    case = cases("full", (1,), ranges=wide)[0]
+    friction = sample_plant(yumi, case.seed, case.physics, case.ranges).config.friction
+    nominal = sample_plant(yumi, case.seed, case.physics).config.friction
+    assert np.all(friction.position_amplitude == 0.25)
+    assert np.all(nominal.position_amplitude == PlantRanges().position_amplitude)
+    for argv, option in ((["--friction-scale", "1.3"], "--friction-scale"),
+                         (["--friction-scale", "0,1"], "--friction-scale"),
+                         (["--position-amplitude", "1.0"], "--position-amplitude")):  # fmt: skip
+        with pytest.raises(SystemExit):
+            guiding_quality.main(argv)
+        assert f": error: {option} must be" in capsys.readouterr().err.strip().splitlines()[-1]

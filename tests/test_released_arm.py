@@ -24,7 +24,6 @@ from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.admittance import AdmittanceState
 from leadthrough.control.feedforward import PassiveFeedForward
 from leadthrough.control.lead_through import LeadThrough
-from leadthrough.experiments import guiding
 from leadthrough.experiments.guiding import Case, run_case
 from leadthrough.friction.compensation import compensation_ceiling
 from leadthrough.twin.plants import PlantRanges, sample_plant
@@ -401,8 +400,6 @@ def test_a_model_that_overstates_every_level_by_its_whole_error_stops(share, run
     without it the estimate reads the friction the model overstates as a push along the
     motion and the released arm runs on (320 mrad when this was written).
     """
-    monkeypatch.setattr(guiding, "sample_plant", lambda robot, seed, physics:
-                        sample_plant(robot, seed, physics, OVERSTATED))  # fmt: skip
     if share is not None:
         friction_margin_share(monkeypatch, share)
 
@@ -411,5 +408,5 @@ def test_a_model_that_overstates_every_level_by_its_whole_error_stops(share, run
                                     relative_error=np.full(robot.n_joints, 0.2))  # fmt: skip
         return LeadThrough(robot, mode=mode, dt=0.004, friction=model)
 
-    result = run_case(Case("dry", 1, "relaxed", "sideways"), "active", measured_model)
+    result = run_case(Case("dry", 1, "relaxed", "sideways", OVERSTATED), "active", measured_model)
     _runs_on_or_stops(result, runs, beyond=0.1)

@@ -20,7 +20,7 @@ simulated robot before the grab (an oracle may then read the true operator torqu
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -33,7 +33,7 @@ from leadthrough.runtime.interface import JointState
 from leadthrough.runtime.loop import stepper
 from leadthrough.twin.operator import During, Hand
 from leadthrough.twin.paths import Circle, Line, Path
-from leadthrough.twin.plants import sample_plant
+from leadthrough.twin.plants import PlantRanges, sample_plant
 from leadthrough.twin.runner import SimulationResult, simulate
 from leadthrough.twin.simulator import DigitalTwin
 
@@ -72,12 +72,15 @@ class Case:
         seed: Plant seed.
         hand: One of :data:`HANDS`.
         path: One of :data:`PATH_NAMES`.
+        ranges: The family the plant is drawn from (default the issue's, :class:`PlantRanges`;
+            a wider one judges defaults beyond the plants they were developed on).
     """
 
     physics: str
     seed: int
     hand: str
     path: str
+    ranges: PlantRanges = field(default_factory=PlantRanges)
 
     @property
     def name(self) -> str:
@@ -141,6 +144,7 @@ def cases(
     kind: str = "full",
     seeds: Sequence[int] = DEVELOPMENT_SEEDS,
     hands: Sequence[str] = BENCHMARK_HANDS,
+    ranges: PlantRanges | None = None,
 ) -> list[Case]:
     """The benchmark's cases: ``"full"`` (14 per seed and physics) or ``"quick"`` (4).
 
@@ -148,16 +152,18 @@ def cases(
         kind: ``"full"`` or ``"quick"``.
         seeds: Plant seeds of the full set (default the development seeds, 56 cases).
         hands: Hands of the full set's lines (:data:`HANDS`); the circle takes the first.
+        ranges: The plant family of every case (default :class:`PlantRanges`).
     """
+    r = ranges or PlantRanges()
     if kind == "quick":
-        return [Case("dry", 1, "stiff", "sideways"), Case("dry", 2, "relaxed", "upwards"),
-                Case("lugre", 1, "stiff", "down-in"),
-                Case("lugre", 2, "relaxed", "circle")]  # fmt: skip
+        return [Case("dry", 1, "stiff", "sideways", r), Case("dry", 2, "relaxed", "upwards", r),
+                Case("lugre", 1, "stiff", "down-in", r),
+                Case("lugre", 2, "relaxed", "circle", r)]  # fmt: skip
     full = []
     for physics in ("dry", "lugre"):
         for seed in seeds:
-            full += [Case(physics, seed, hand, path) for hand in hands for path in LINES]
-            full.append(Case(physics, seed, hands[0], "circle"))
+            full += [Case(physics, seed, hand, path, r) for hand in hands for path in LINES]
+            full.append(Case(physics, seed, hands[0], "circle", r))
     return full
 
 
@@ -223,7 +229,7 @@ def _run(
     The hand grabs the flange where it is once the calibration is over (the calibration
     may have moved the arm a little): its path starts there.
     """
-    plant = sample_plant(robot, case.seed, case.physics)
+    plant = sample_plant(robot, case.seed, case.physics, case.ranges)
     stiffness, damping = HANDS[case.hand]
     recorder = _Recorder(factory(robot, mode))
     grab = float(getattr(recorder.controller, "calibration_time", CalibrationParameters().duration))
@@ -485,6 +491,7 @@ def evaluate(
     seeds: Sequence[int] = DEVELOPMENT_SEEDS,
     passive_factory: ControllerFactory | None = None,
     hands: Sequence[str] = BENCHMARK_HANDS,
+    ranges: PlantRanges | None = None,
 ) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, float]]]:
     """Every case of ``cases(kind)``: default passive against the active controller.
 
@@ -499,13 +506,15 @@ def evaluate(
         passive_factory: Builds the passive controller, ``factory(robot, "passive")``;
             default :func:`default_factory`.
         hands: Hands of the full set (:func:`cases`).
+        ranges: The plant family (default :class:`PlantRanges`, the one the defaults were
+            developed on; e.g. ``PlantRanges(position_amplitude=0.25)`` is held out).
 
     Returns:
         The figures per case name (:func:`figures`) and their :func:`summary`.
     """
     robot = _robot_or_yumi(robot)
     results = {}
-    for case in cases(kind, seeds, hands):
+    for case in cases(kind, seeds, hands, ranges):
         passive = run_case(case, "passive", passive_factory, robot=robot)
         active = run_case(case, "active", controller_factory, robot=robot)
         results[case.name] = figures(passive, active)
