@@ -8,6 +8,7 @@ import pytest
 import leadthrough as lt
 from as_found import slow_calibration_motion
 from leadthrough.control.calibration import (
+    Calibration,
     CalibrationParameters,
     CalibrationRun,
     implausible_friction,
@@ -20,11 +21,14 @@ from leadthrough.twin.mjcf import Payload
 from leadthrough.twin.model_error import ModelError
 from leadthrough.twin.operator import Hand
 from leadthrough.twin.paths import MinimumJerk
-from leadthrough.twin.plants import sample_plant
+from leadthrough.twin.plants import PlantRanges, sample_plant
 from leadthrough.twin.runner import simulate
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig
 
 MASSES_OFF = ModelError(mass_error=0.05, com_error=0.005)
+#: A family wider than the guiding benchmark's: levels 0.7–1.3 of the model's, ±25 % along
+#: the travel (``guiding_quality.py --friction-scale 0.7,1.3 --position-amplitude 0.25``).
+WIDER = PlantRanges(friction_scale=(0.7, 1.3), position_amplitude=0.25)
 
 
 @pytest.fixture(scope="module")
@@ -225,9 +229,54 @@ def test_touching_the_arm_during_calibration_refuses_it_and_never_faults(yumi):
     simulate(DigitalTwin(yumi, operator=hand), controller, 1.5)
     result = controller.calibration
     assert not result.accepted and "touched" in result.reason and "\n" not in result.reason
-    assert result.payload == 0.0 and np.all(result.friction_scale == 1.0)
+    assert result.payload == 0.0 and np.all(result.bias == 0.0)
+    nominal = FrictionModel.from_robot(yumi)
+    np.testing.assert_array_equal(controller.friction.coulomb, nominal.coulomb)  # as given
+    assert np.all(controller.friction.relative_error >= nominal.relative_error)
     assert controller.state is SupervisorState.TEACHING
     assert any(e.kind == "calibration" for e in controller.supervisor.events)
+
+
+def test_a_refused_calibration_widens_the_friction_error_of_levels_it_read_low(yumi):
+    """Refused: not its readings, but how far below the model's it read a level, is used.
+
+    The error that runs a released arm on is a level the model overstates: one read at
+    ``r`` < 1 times the model's makes ``1 − r`` that joint's friction error.
+    """
+    nominal, zeros = FrictionModel.from_robot(yumi), np.zeros(7)
+    read = np.array([0.52, 1.3, 0.9, -0.1, 0.3, 1.0, 0.7])
+    measured = np.array([True, True, True, True, False, True, True])
+    refused = Calibration(zeros, zeros, zeros, 0.0, zeros, read, False,
+                          "calibration refused: joint 1 …", measured)  # fmt: skip
+    friction = refused.friction(nominal)
+    np.testing.assert_array_equal(friction.coulomb, nominal.coulomb)
+    np.testing.assert_allclose(friction.relative_error, [0.48, 0.2, 0.2, 1.0, 0.2, 0.2, 0.3])
+    assert refused.summary().endswith("(joint 1 0.52×, joint 3 0.90×, joint 4 0.00×, "
+                                      "joint 7 0.70×)")  # fmt: skip
+    nothing_read = dataclasses.replace(refused, friction_scale=np.ones(7))
+    assert nothing_read.friction(nominal) is nominal
+    assert nothing_read.summary() == "calibration refused: joint 1 …"
+
+
+def test_a_level_read_far_below_the_model_refuses_the_calibration_and_widens_its_error(yumi):
+    """Dry #11 of a family wider than the benchmark's: joint 1 reads about half the model's.
+
+    Refused (outside the plausible band), the controller guides with the model as given,
+    joint 1 with a friction error as large as the reading shows; released on its upward
+    line the arm then stops, where it ran on 45 mrad with the model's error alone
+    (``tests/test_released_arm.py``).
+    """
+    plant = sample_plant(yumi, 11, "dry", WIDER)
+    controller = LeadThrough(yumi, calibrate=True)
+    simulate(DigitalTwin(yumi, plant.config), controller, 1.2)
+    result = controller.calibration
+    assert not result.accepted and "joint 1's friction seems" in result.reason
+    read = result.friction_scale[0]
+    assert read < 1.0 / (1.0 + CalibrationParameters().max_friction_change)
+    np.testing.assert_array_equal(controller.friction.coulomb,
+                                  FrictionModel.from_robot(yumi).coulomb)  # fmt: skip
+    assert controller.law.friction_error[0] == pytest.approx(1.0 - read)
+    assert f"joint 1 {read:.2f}×" in controller.supervisor.events[-1].detail
 
 
 def test_calibration_motion_is_small_and_returns(yumi):

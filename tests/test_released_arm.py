@@ -22,6 +22,7 @@ from as_found import friction_margin_share, own_rest_bands, slow_calibration_mot
 from leadthrough.control import active_law, calibration
 from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.admittance import AdmittanceState
+from leadthrough.control.calibration import Calibration
 from leadthrough.control.feedforward import PassiveFeedForward
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.experiments.guiding import Case, run_case
@@ -50,6 +51,11 @@ SPRING_HELD = Case("lugre", 1, "stiff", "down-in")
 #: Every friction level 0.8 of the model's, uniform along the travel: the edge of the 0.2 a
 #: level measured on this arm may be off by.
 OVERSTATED = PlantRanges(friction_scale=(0.8, 0.8), position_amplitude=0.0)
+#: Dry #11 of a family wider than the benchmark's (levels 0.7–1.3, ±25 % along the travel):
+#: its calibration is refused (joint 1 reads 0.52× the model's) and joint 1 turns ~0.8 rad
+#: on the upward line; with the model's error alone the released arm ran on 45 mrad.
+READ_LOW = Case("dry", 11, "relaxed", "upwards",
+                PlantRanges(friction_scale=(0.7, 1.3), position_amplitude=0.25))  # fmt: skip
 
 
 class _Uncorrected(LeadThrough):
@@ -410,3 +416,20 @@ def test_a_model_that_overstates_every_level_by_its_whole_error_stops(share, run
 
     result = run_case(Case("dry", 1, "relaxed", "sideways", OVERSTATED), "active", measured_model)
     _runs_on_or_stops(result, runs, beyond=0.1)
+
+
+@pytest.mark.parametrize("widened, runs", [(True, False), (False, True)],
+                         ids=["error-widened", "model-error-alone"])  # fmt: skip
+def test_a_refused_calibration_that_read_a_level_low_still_stops_the_released_arm(
+    widened, runs, monkeypatch
+):
+    """Refused, the run's low reading of joint 1 still widens its friction error: it stops.
+
+    Without (the refused calibration left no trace) the model's level, about twice the
+    plant's, reads as a push along the motion that the 0.35 margin does not cover.
+    """
+    if not widened:
+        monkeypatch.setattr(Calibration, "lowered", lambda self: np.ones(7))
+    result = run_case(READ_LOW, "active")
+    assert not result.calibrated
+    _runs_on_or_stops(result, runs, beyond=0.01)

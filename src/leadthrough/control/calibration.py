@@ -173,7 +173,9 @@ class Calibration:
         payload: Payload mass at the flange that explains the gravity error best [kg].
         bias: Gravity error left once the payload is modelled [Nm] (0 on a joint that
             did not slide both ways).
-        friction_scale: True over modelled Coulomb level, per joint [–].
+        friction_scale: True over modelled Coulomb level, per joint [–]; a refused
+            calibration keeps what it read (1 where it read nothing), of which only the
+            levels below the model's are used (:meth:`lowered`).
         accepted: Whether the result is plausible (nobody touched the arm).
         reason: Why it was refused ("" if accepted).
         measured: Joints whose Coulomb level was measured: they slid both ways at pace for
@@ -194,13 +196,37 @@ class Calibration:
     measured: BoolArray | None = None
 
     def summary(self) -> str:
-        """One line: what was measured, or why the calibration was refused."""
+        """One line: what was measured, or why the calibration was refused.
+
+        A refused one also names the levels it read below the model's (:meth:`lowered`).
+        """
         if not self.accepted:
-            return self.reason
+            lowered = self.lowered()
+            low = ", ".join(f"joint {j + 1} {lowered[j]:.2f}×"
+                            for j in np.flatnonzero(lowered < 1.0))  # fmt: skip
+            if not low:
+                return self.reason
+            return (f"{self.reason}; guiding with the model, its friction error at least what "
+                    f"the levels read below it show ({low})")  # fmt: skip
         scale = self.friction_scale[self.measured]
         return (f"calibrated: payload {self.payload:.2f} kg, Coulomb levels "
                 f"×{scale.min():.2f}–{scale.max():.2f} of the model, gravity bias up to "
                 f"{np.max(np.abs(self.bias)):.3f} Nm")  # fmt: skip
+
+    def lowered(self) -> FloatArray:
+        """Per joint, how far below the model's a refused calibration read a level [–].
+
+        The readings' ``friction_scale`` clipped to [0, 1] on the joints measured, 1
+        elsewhere. A refused run's readings are not taken as levels (:meth:`friction`
+        keeps the model's), but a level the model overstates is the error that runs a
+        released arm on: the estimate reads it as a push along the motion and the
+        compensation pushes with it, while one it understates only makes guiding heavier.
+        So a level read at ``r`` < 1 times the model's widens that joint's relative
+        error to at least ``1 − r``: more friction margin, never less.
+        """
+        if self.measured is None:
+            return np.ones_like(self.friction_scale)
+        return np.where(self.measured, np.clip(self.friction_scale, 0.0, 1.0), 1.0)
 
     def robot(self, nominal: RobotDescription) -> RobotDescription:
         """The description with the measured payload."""
@@ -213,9 +239,16 @@ class Calibration:
             nominal: The model before the calibration.
             accuracy: Relative error of the measured levels [–]; the joints that slid then
                 carry ``min(nominal error, accuracy)``. None keeps the nominal errors.
+
+        A refused calibration gives ``nominal`` back, its errors widened where it read a
+        level below the model's (:meth:`lowered`).
         """
-        if not self.accepted:
-            return nominal
+        if not self.accepted:  # the model's levels, with as much error as the readings show
+            lowered = self.lowered()
+            if np.all(lowered == 1.0):
+                return nominal
+            return dataclasses.replace(nominal, relative_error=np.maximum(
+                nominal.relative_error, 1.0 - lowered))  # fmt: skip
         error = nominal.relative_error
         if accuracy is not None and self.measured is not None:
             error = np.where(self.measured, np.minimum(error, accuracy), error)
@@ -349,12 +382,13 @@ class CalibrationRun:
         if np.any(changed):
             joint = int(np.argmax(np.where(changed, np.abs(scale - 1.0), -1.0)))
             return self._refused(f"joint {joint + 1}'s friction seems {scale[joint]:.2f}× the "
-                                 "model's: was the arm touched?")  # fmt: skip
+                                 "model's: was the arm touched?", scale, measured)  # fmt: skip
         per_kilogram = self.payload_regressor(self.pose)
         payload = self.payload(gravity_error, per_kilogram, slid)
         if payload > p.max_payload:
             return self._refused(f"a payload of {payload:.2f} kg is more than the "
-                                 f"{p.max_payload:g} kg allowed: was the arm touched?")  # fmt: skip
+                                 f"{p.max_payload:g} kg allowed: was the arm touched?", scale,
+                                 measured)  # fmt: skip
         bias = np.where(slid, gravity_error + payload * per_kilogram, 0.0)
         return Calibration(self.pose, gravity_error, coulomb_error, payload, bias, scale, True,
                            measured=measured)  # fmt: skip
@@ -390,8 +424,16 @@ class CalibrationRun:
         """Gravity torque of one kilogram at the flange, ``Y = −J_vᵀ g`` [Nm/kg]."""
         return -self.dynamics.jacobian(q)[:3].T @ self.dynamics.robot.gravity
 
-    def _refused(self, reason: str) -> Calibration:
+    def _refused(
+        self, reason: str, scale: FloatArray | None = None, measured: BoolArray | None = None
+    ) -> Calibration:
+        """Refused: nothing of it is used but how far below the model's it read levels.
+
+        ``scale`` and ``measured``: the levels read, when the readings got that far.
+        """
         n = self.pose.shape[0]
         zeros = np.zeros(n)
-        return Calibration(self.pose, zeros, zeros, 0.0, zeros, np.ones(n), False,
-                           f"calibration refused: {reason}", np.zeros(n, dtype=bool))  # fmt: skip
+        scale = np.ones(n) if scale is None else scale
+        measured = np.zeros(n, dtype=bool) if measured is None else measured
+        return Calibration(self.pose, zeros, zeros, 0.0, zeros, scale, False,
+                           f"calibration refused: {reason}", measured)  # fmt: skip

@@ -394,10 +394,17 @@ class LeadThrough:
         return command
 
     def _finish_calibration(self, calibration: Calibration, t: float) -> None:
-        """Use what the calibration measured: payload, friction levels, bias at the pose."""
+        """Use what the calibration measured: payload, friction levels, bias at the pose.
+
+        A refused one leaves the model as given, with wider friction errors where it read
+        levels below the model's (:meth:`Calibration.lowered`).
+        """
         self.calibration, self._calibrating = calibration, False
         self.supervisor.log("calibration", calibration.summary(), t)
         if not calibration.accepted:
+            friction = calibration.friction(self.nominal_friction)
+            if friction is not self.nominal_friction:
+                self._build(self.robot, friction, self._identified)
             return
         robot = calibration.robot(self.robot)
         accuracy = self.parameters.calibration.friction_accuracy  # type: ignore[union-attr]
