@@ -19,8 +19,8 @@ Usage:
         [--robot NAME] [--seeds 5-8]  (another arm; plants not developed on)
         [--hands soft,firm]           (other hands of guiding.HANDS: 100 and 1000 N/m)
         [--uncalibrated]              (both modes without the start-up calibration)
-        [--position-amplitude 0.25]   (a wider family: dry friction ±25 % along the travel)
-        [--friction-scale 0.7,1.3]    (a wider family: levels 0.7–1.3 of the nominal)
+        [--plants FIELD=VALUE ...]    (another family: twin.plants.PlantRanges fields, e.g.
+                                       position_amplitude=0.25 friction_scale=0.7,1.3)
 """
 
 from __future__ import annotations
@@ -30,8 +30,9 @@ import importlib
 import json
 import sys
 import time
-from dataclasses import asdict, replace
+from dataclasses import asdict, fields, replace
 
+from leadthrough.errors import ParameterError
 from leadthrough.experiments.guiding import (
     BENCHMARK_HANDS,
     DIAGNOSTICS,
@@ -96,28 +97,36 @@ def parse_seeds(text: str) -> list[int]:
     return seeds
 
 
-def plant_ranges(position_amplitude: float | None, friction_scale: str | None) -> PlantRanges:
-    """The plant family: :class:`PlantRanges` with the options given replacing its ranges.
+def plant_ranges(settings: list[str] | None) -> PlantRanges:
+    """The plant family: :class:`PlantRanges` with ``FIELD=VALUE`` settings replacing ranges.
+
+    VALUE is one number for a scalar field (``position_amplitude=0.25``) and ``LOW,HIGH``
+    for a range (``friction_scale=0.7,1.3``; whole numbers for ``delay_periods``).
 
     Raises:
-        ValueError: An amplitude outside [0, 1) or a scale that is not ``LOW,HIGH`` with
-            0 < LOW ≤ HIGH (the message names the option).
+        ValueError: An unknown field, a malformed value or one outside what the field allows
+            (one line naming it).
     """
-    ranges = PlantRanges()
-    if position_amplitude is not None:
-        if not 0.0 <= position_amplitude < 1.0:
-            raise ValueError(f"--position-amplitude must be in [0, 1), got {position_amplitude}")
-        ranges = replace(ranges, position_amplitude=position_amplitude)
-    if friction_scale is not None:
+    defaults, changes = PlantRanges(), {}
+    for setting in settings or []:
+        name, _, text = setting.partition("=")
+        if name not in {f.name for f in fields(PlantRanges)}:
+            known = ", ".join(f.name for f in fields(PlantRanges))
+            raise ValueError(f"--plants: unknown field {name!r}, choose from {known}")
+        default = getattr(defaults, name)
+        kind = type(default[0]) if isinstance(default, tuple) else type(default)
         try:
-            low, high = (float(x) for x in friction_scale.split(","))
+            numbers = tuple(kind(x) for x in text.split(","))
         except ValueError:
-            low = high = float("nan")
-        if not 0.0 < low <= high:
-            raise ValueError(f"--friction-scale must be LOW,HIGH with 0 < LOW <= HIGH, "
-                             f"got {friction_scale!r}")  # fmt: skip
-        ranges = replace(ranges, friction_scale=(low, high))
-    return ranges
+            numbers = ()
+        if len(numbers) != (len(default) if isinstance(default, tuple) else 1):
+            form = "LOW,HIGH" if isinstance(default, tuple) else "one number"
+            raise ValueError(f"--plants: {name} takes {form}, got {text!r}")
+        changes[name] = numbers if isinstance(default, tuple) else numbers[0]
+    try:
+        return replace(defaults, **changes)
+    except ParameterError as error:
+        raise ValueError(f"--plants: {error}") from None
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -142,16 +151,12 @@ def main(argv: list[str] | None = None) -> None:
         f"{','.join(BENCHMARK_HANDS)}; the circle takes the first)",
     )
     parser.add_argument(
-        "--position-amplitude",
-        type=float,
-        help=f"relative dry-friction level change along the travel (default "
-        f"{PlantRanges().position_amplitude}: a larger one is a family the defaults were not "
-        "developed on)",
-    )
-    parser.add_argument(
-        "--friction-scale",
-        help="range of the plants' friction levels over the nominal, LOW,HIGH (default "
-        f"{','.join(str(x) for x in PlantRanges().friction_scale)})",
+        "--plants",
+        nargs="+",
+        metavar="FIELD=VALUE",
+        help="draw the plants from another family: fields of twin.plants.PlantRanges, e.g. "
+        "position_amplitude=0.25 friction_scale=0.7,1.3 (default: the family the defaults "
+        "were developed on)",
     )
     parser.add_argument("--save", help="write the per-case figures and the summary to JSON")
     parser.add_argument("--compare", help="a JSON saved before: print its summary alongside")
@@ -170,7 +175,7 @@ def main(argv: list[str] | None = None) -> None:
     if unknown:
         parser.error(f"unknown hand(s) {', '.join(unknown)}: choose from {', '.join(HANDS)}")
     try:
-        ranges = plant_ranges(args.position_amplitude, args.friction_scale)
+        ranges = plant_ranges(args.plants)
     except ValueError as error:
         parser.error(str(error))
     total, start = len(cases(args.cases, seeds, hands, ranges)), time.perf_counter()

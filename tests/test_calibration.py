@@ -27,7 +27,7 @@ from leadthrough.twin.simulator import DigitalTwin, TwinConfig
 
 MASSES_OFF = ModelError(mass_error=0.05, com_error=0.005)
 #: A family wider than the guiding benchmark's: levels 0.7–1.3 of the model's, ±25 % along
-#: the travel (``guiding_quality.py --friction-scale 0.7,1.3 --position-amplitude 0.25``).
+#: the travel (``guiding_quality.py --plants friction_scale=0.7,1.3 position_amplitude=0.25``).
 WIDER = PlantRanges(friction_scale=(0.7, 1.3), position_amplitude=0.25)
 
 

@@ -41,15 +41,17 @@ def test_other_hands_make_the_cases_and_an_unknown_one_is_a_one_line_error(capsy
     assert error.endswith("unknown hand(s) gentle: choose from relaxed, stiff, soft, firm")
 
 
-def test_a_wider_plant_family_reaches_every_case_and_a_bad_range_is_a_one_line_error(capsys):
-    """``--position-amplitude 0.25 --friction-scale 0.7,1.3``: every case's plant drawn wider."""
+def test_a_wider_plant_family_reaches_every_case_and_a_bad_setting_is_a_one_line_error(capsys):
+    """``--plants position_amplitude=0.25 friction_scale=0.7,1.3``: every case drawn wider."""
     from leadthrough.experiments.guiding import cases
     from leadthrough.model import robots
     from leadthrough.twin.plants import PlantRanges, sample_plant
 
-    wide = guiding_quality.plant_ranges(0.25, "0.7,1.3")
-    assert wide == PlantRanges(position_amplitude=0.25, friction_scale=(0.7, 1.3))
-    assert guiding_quality.plant_ranges(None, None) == PlantRanges()
+    wide = guiding_quality.plant_ranges(["position_amplitude=0.25", "friction_scale=0.7,1.3",
+                                         "delay_periods=1,3"])  # fmt: skip
+    assert wide == PlantRanges(position_amplitude=0.25, friction_scale=(0.7, 1.3),
+                               delay_periods=(1, 3))  # fmt: skip
+    assert guiding_quality.plant_ranges(None) == PlantRanges()
     every = cases("full", (1,), ranges=wide) + cases("quick", ranges=wide)
     assert {c.ranges for c in every} == {wide}
     yumi = robots.yumi()
@@ -58,9 +60,12 @@ def test_a_wider_plant_family_reaches_every_case_and_a_bad_range_is_a_one_line_e
     nominal = sample_plant(yumi, case.seed, case.physics).config.friction
     assert np.all(friction.position_amplitude == 0.25)
     assert np.all(nominal.position_amplitude == PlantRanges().position_amplitude)
-    for argv, option in ((["--friction-scale", "1.3"], "--friction-scale"),
-                         (["--friction-scale", "0,1"], "--friction-scale"),
-                         (["--position-amplitude", "1.0"], "--position-amplitude")):  # fmt: skip
+    bad = (("friction_scale=1.3", "friction_scale takes LOW,HIGH, got '1.3'"),
+           ("friction_scale=1.3,0.7", "friction_scale: must be > 0, LOW ≤ HIGH"),
+           ("delay_periods=1,2.5", "delay_periods takes LOW,HIGH, got '1,2.5'"),
+           ("position_amplitude=1", "position_amplitude: must be in [0, 1)"),
+           ("friction=0.5", "unknown field 'friction', choose from mass_error"))  # fmt: skip
+    for setting, says in bad:
         with pytest.raises(SystemExit):
-            guiding_quality.main(argv)
-        assert f": error: {option} must be" in capsys.readouterr().err.strip().splitlines()[-1]
+            guiding_quality.main(["--plants", setting])
+        assert says in capsys.readouterr().err.strip().splitlines()[-1]

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
+from leadthrough.errors import ParameterError
 from leadthrough.experiments.guiding import Case, release_figures, run_case, tool_vibration
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.twin.dry_friction import DryFrictionParameters
@@ -163,3 +164,17 @@ def test_benchmark_seeds_and_uncalibrated_factory(robot):
     for mode in ("passive", "active"):
         controller = uncalibrated_factory(robot, mode)
         assert not controller.calibrating and controller.mode == mode
+
+
+@pytest.mark.parametrize("field, value, says", [
+    ("position_amplitude", 1.0, "position_amplitude: must be in [0, 1), got 1.0"),
+    ("friction_scale", (1.3, 0.7), "friction_scale: must be > 0, LOW ≤ HIGH, got (1.3, 0.7)"),
+    ("static_ratio", (0.9, 1.2), "static_ratio: must be ≥ 1"),
+    ("delay_periods", (1, 2.5), "delay_periods: must be whole periods ≥ 0"),
+    ("torque_offset", (-0.1, float("nan")), "torque_offset: must be finite"),
+])  # fmt: skip
+def test_a_plant_range_outside_what_it_allows_is_a_one_line_error(field, value, says):
+    """A family is checked where it is made, not when a plant of it is drawn mid-run."""
+    with pytest.raises(ParameterError) as error:
+        PlantRanges(**{field: value})
+    assert says in str(error.value) and "\n" not in str(error.value)

@@ -21,10 +21,12 @@ The controller keeps the nominal description and friction: nothing here is visib
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
+from leadthrough.errors import ParameterError
 from leadthrough.model.description import RobotDescription
 from leadthrough.twin.dry_friction import DryFrictionParameters
 from leadthrough.twin.errors import FrictionParameterError
@@ -67,6 +69,31 @@ class PlantRanges:
     torque_offset: tuple[float, float] = (-0.05, 0.05)
     velocity_cutoff: tuple[float, float] = (15.0, 40.0)
     position_amplitude: float = 0.15
+
+    def __post_init__(self) -> None:
+        for name, (allowed, text) in _RANGE_RULES.items():
+            value = getattr(self, name)
+            ends = value if isinstance(value, tuple) else (value,)
+            if not all(np.isfinite(x) and allowed(x) for x in ends) or ends[0] > ends[-1]:
+                order = ", LOW ≤ HIGH" if isinstance(value, tuple) else ""
+                raise ParameterError(name, f"must be {text}{order}, got {value}")
+
+
+#: What both ends of each range of :class:`PlantRanges` must satisfy (and low ≤ high).
+_RANGE_RULES: dict[str, tuple[Callable[[float], bool], str]] = {
+    "mass_error": (lambda x: 0.0 <= x < 1.0, "in [0, 1)"),
+    "com_error": (lambda x: x >= 0.0, "≥ 0"),
+    "friction_scale": (lambda x: x > 0.0, "> 0"),
+    "static_ratio": (lambda x: x >= 1.0, "≥ 1"),
+    "stribeck_velocity": (lambda x: x > 0.0, "> 0"),
+    "delay_periods": (lambda x: x >= 0 and float(x).is_integer(), "whole periods ≥ 0"),
+    "torque_noise_std": (lambda x: x >= 0.0, "≥ 0"),
+    "torque_ripple": (lambda x: x >= 0.0, "≥ 0"),
+    "torque_gain": (lambda x: x > 0.0, "> 0"),
+    "torque_offset": (lambda x: True, "finite"),
+    "velocity_cutoff": (lambda x: x > 0.0, "> 0"),
+    "position_amplitude": (lambda x: 0.0 <= x < 1.0, "in [0, 1)"),
+}
 
 
 @dataclass(frozen=True, eq=False)
