@@ -9,6 +9,7 @@ import numpy as np
 import leadthrough as lt
 from leadthrough.control.calibration import CalibrationParameters, CalibrationRun
 from leadthrough.model.description import JointFriction
+from leadthrough.twin.plants import PlantRanges, sample_plant
 from leadthrough.twin.runner import simulate
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig
 
@@ -66,7 +67,7 @@ def test_a_joint_faster_than_max_speed_stops_the_calibration():
     fast[4] = 1.5 * CalibrationParameters().max_speed
     run.command(0.0, robot.home(), fast)
     result = run.result()
-    assert not result.accepted and "joint 5 moved at 1.500 rad/s" in result.reason
+    assert not result.accepted and f"joint 5 moved at {fast[4]:.3f} rad/s" in result.reason
     assert "\n" not in result.reason and result.payload == 0.0
 
 
@@ -80,3 +81,19 @@ def test_a_payload_that_shows_in_no_joint_is_zero_not_nan():
         run.record(t, np.full(7, 0.05 if (k // 10) % 2 else -0.05), np.zeros(7))
     result = run.result()
     assert result.accepted and result.payload == 0.0 and np.all(np.isfinite(result.bias))
+
+
+def test_a_wrist_that_breaks_out_of_stiction_faster_than_1_rad_s_still_calibrates():
+    """Dry #1 with levels ±25 % along the travel: joint 6 jumps at > 1 rad/s, ~50 ms.
+
+    A stick-slip jump, not a runaway: it stays within the 4 strokes of the motion. With
+    ``max_speed`` 1 rad/s (before) the calibration was refused and the arm guided on the
+    model; the limit now sits between such jumps and a runaway (2.8 rad/s and rising).
+    """
+    robot = lt.robots.yumi()
+    plant = sample_plant(robot, 1, "dry", PlantRanges(position_amplitude=0.25))
+    controller = lt.LeadThrough(robot, calibrate=True)
+    sim = simulate(DigitalTwin(robot, plant.config), controller, 1.0)
+    peak = np.abs(sim.qd).max(axis=0)
+    assert 1.0 < peak[5] < CalibrationParameters().max_speed
+    assert controller.calibration.accepted, controller.calibration.reason
