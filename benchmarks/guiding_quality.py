@@ -108,11 +108,11 @@ def plant_ranges(settings: list[str] | None) -> PlantRanges:
             (one line naming it).
     """
     defaults, changes = PlantRanges(), {}
+    known = [f.name for f in fields(PlantRanges)]
     for setting in settings or []:
         name, _, text = setting.partition("=")
-        if name not in {f.name for f in fields(PlantRanges)}:
-            known = ", ".join(f.name for f in fields(PlantRanges))
-            raise ValueError(f"--plants: unknown field {name!r}, choose from {known}")
+        if name not in known:
+            raise ValueError(f"--plants: unknown field {name!r}, choose from {', '.join(known)}")
         default = getattr(defaults, name)
         kind = type(default[0]) if isinstance(default, tuple) else type(default)
         try:

@@ -21,14 +21,11 @@ from leadthrough.twin.mjcf import Payload
 from leadthrough.twin.model_error import ModelError
 from leadthrough.twin.operator import Hand
 from leadthrough.twin.paths import MinimumJerk
-from leadthrough.twin.plants import PlantRanges, sample_plant
+from leadthrough.twin.plants import WIDER_RANGES, sample_plant
 from leadthrough.twin.runner import simulate
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig
 
 MASSES_OFF = ModelError(mass_error=0.05, com_error=0.005)
-#: A family wider than the guiding benchmark's: levels 0.7–1.3 of the model's, ±25 % along
-#: the travel (``guiding_quality.py --plants friction_scale=0.7,1.3 position_amplitude=0.25``).
-WIDER = PlantRanges(friction_scale=(0.7, 1.3), position_amplitude=0.25)
 
 
 @pytest.fixture(scope="module")
@@ -266,7 +263,7 @@ def test_a_level_read_far_below_the_model_refuses_the_calibration_and_widens_its
     line the arm then stops, where it ran on 45 mrad with the model's error alone
     (``tests/test_released_arm.py``).
     """
-    plant = sample_plant(yumi, 11, "dry", WIDER)
+    plant = sample_plant(yumi, 11, "dry", WIDER_RANGES)
     controller = LeadThrough(yumi, calibrate=True)
     simulate(DigitalTwin(yumi, plant.config), controller, 1.2)
     result = controller.calibration

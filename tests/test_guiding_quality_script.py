@@ -45,13 +45,15 @@ def test_a_wider_plant_family_reaches_every_case_and_a_bad_setting_is_a_one_line
     """``--plants position_amplitude=0.25 friction_scale=0.7,1.3``: every case drawn wider."""
     from leadthrough.experiments.guiding import cases
     from leadthrough.model import robots
-    from leadthrough.twin.plants import PlantRanges, sample_plant
+    from leadthrough.twin.plants import WIDER_RANGES, PlantRanges, sample_plant
 
     wide = guiding_quality.plant_ranges(["position_amplitude=0.25", "friction_scale=0.7,1.3",
                                          "delay_periods=1,3"])  # fmt: skip
     assert wide == PlantRanges(position_amplitude=0.25, friction_scale=(0.7, 1.3),
                                delay_periods=(1, 3))  # fmt: skip
     assert guiding_quality.plant_ranges(None) == PlantRanges()
+    bench = ["friction_scale=0.7,1.3", "position_amplitude=0.25"]  # make bench, the README
+    assert guiding_quality.plant_ranges(bench) == WIDER_RANGES
     every = cases("full", (1,), ranges=wide) + cases("quick", ranges=wide)
     assert {c.ranges for c in every} == {wide}
     yumi = robots.yumi()
