@@ -53,6 +53,57 @@ def test_filter_covariance_is_the_wide_band_it_replaces():
     assert result.observer_coverage == 1.0 and result.observer_std > 0.6
 
 
+def test_a_level_nobody_measured_has_the_band_the_law_bounds_it_with():
+    """The observer's level error is the law's: ``unmeasured_friction_error`` until measured.
+
+    Without a calibration every level is known to 0.35 (the spread of units of a robot
+    type); after one, the joints it slid carry its ``friction_accuracy`` (0.2) and the
+    others keep 0.35.
+    """
+    robot = lt.robots.yumi()
+    controller = lt.LeadThrough(robot, mode="active", dt=0.004)
+    unmeasured = controller.parameters.unmeasured_friction_error
+    error = controller.observer.friction.relative_error
+    np.testing.assert_array_equal(error, controller.law.friction_error)
+    np.testing.assert_allclose(error, unmeasured)
+    q, n = robot.home(), robot.n_joints
+    measured = np.ones(n, dtype=bool)
+    measured[2] = False
+    zeros = np.zeros(n)
+    calibration = Calibration(q, zeros, zeros, 0.0, zeros, np.ones(n), True, "", measured)
+    controller._finish_calibration(calibration, 0.0)
+    error = controller.observer.friction.relative_error
+    np.testing.assert_array_equal(error, controller.law.friction_error)
+    accuracy = controller.parameters.calibration.friction_accuracy
+    np.testing.assert_allclose(error[measured], accuracy)
+    assert error[2] == pytest.approx(unmeasured)
+
+
+def test_uncalibrated_the_band_covers_levels_the_model_does_not_know():
+    """Dry #11 uncalibrated, its levels as far off as the law assumes: the band still covers.
+
+    With the model's own 20 % as the band's level error (the previous release) it covered
+    46 % of the moving samples (0.35 now: 96 %, std 19 % of the peak).
+    """
+    case = Case("dry", 11, "stiff", "upwards")
+
+    class _ModelsOwnBand(lt.LeadThrough):
+        def _build(self, robot, friction, measured=None):
+            super()._build(robot, friction, measured)
+            self.observer = MomentumObserver(self.dynamics, friction, self.dt,
+                                             self.parameters.observer)  # fmt: skip
+
+    def uncalibrated(robot, mode):
+        return lt.LeadThrough(robot, mode=mode, dt=0.004)
+
+    def models_own_band(robot, mode):
+        return _ModelsOwnBand(robot, mode=mode, dt=0.004)
+
+    result = run_case(case, "active", uncalibrated)
+    assert result.observer_coverage >= 0.9 and result.observer_std <= 0.3
+    assert run_case(case, "active", models_own_band).observer_coverage < 0.7
+
+
 def test_error_std_is_the_friction_models_error_at_the_latest_sample():
     """Eq. (3) without P_ττ; wide at rest (the blind spot), narrow once the joint moves."""
     robot = lt.robots.yumi()

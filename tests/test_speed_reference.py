@@ -21,7 +21,9 @@ level only if it slid at pace long enough (``calibration._MEASURED``) and a payl
 if it stands out of the model's gravity error (``CalibrationRun.payload``), then the
 calibration sliding 10 mrad at 0.1 rad/s, above the Stribeck range (``CalibrationParameters``),
 then a resting joint's Coulomb band in the law narrowed by the joints read together
-(``ActiveLaw.narrow``). A faster step must reproduce them.
+(``ActiveLaw.narrow``), then the observer's band taking each level's error from the law
+(``LeadThrough._build``: a level nothing measured known to 0.35). A faster step must
+reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

@@ -27,6 +27,7 @@ the component, and the safe stop is sent in the same period.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 
@@ -142,7 +143,10 @@ class LeadThrough:
         self.feed_forward = PassiveFeedForward(self.dynamics, friction, self.dt, p.compensation,
             p.dither, measurement_delay=None, friction_error=self.law.friction_error,
             gravity_uncertainty=p.gravity_uncertainty)  # fmt: skip
-        self.observer = MomentumObserver(self.dynamics, friction, self.dt, p.observer)
+        # the observer's band states each level's error as the law bounds it: a level
+        # nobody measured on this arm is known to ``unmeasured_friction_error`` only
+        known = dataclasses.replace(friction, relative_error=self.law.friction_error)
+        self.observer = MomentumObserver(self.dynamics, known, self.dt, p.observer)
         self.fusion = None if p.tool_force is None else ToolForceFusion(friction, p.tool_force)
 
     # --- state a user may read ---------------------------------------------------------
@@ -185,7 +189,8 @@ class LeadThrough:
 
         The model's two errors at the latest sample, independent: the friction model's
         (the observer's ``error_std``; large at rest, where a push below breakaway is
-        unseen) and the gravity model's, ``parameters.gravity_std · |G(q) − G_cal|``
+        unseen; each level's error the law's, ``law.friction_error``) and the gravity
+        model's, ``parameters.gravity_std · |G(q) − G_cal|``
         (G_cal the gravity the calibration measured at its pose on the joints it
         measured, 0 elsewhere and without one: the error the Coulomb compensation's
         ceiling allows for). ``observer.std`` is the filter's own covariance.
