@@ -53,6 +53,20 @@ def test_filter_covariance_is_the_wide_band_it_replaces():
     assert result.observer_coverage == 1.0 and result.observer_std > 0.6
 
 
+def _calibrated_but_joint_3(controller):
+    """Finish ``controller``'s calibration at home with every joint measured but joint 3.
+
+    Returns the pose and the measured joints.
+    """
+    q, n = controller.robot.home(), controller.robot.n_joints
+    measured = np.ones(n, dtype=bool)
+    measured[2] = False
+    zeros = np.zeros(n)
+    calibration = Calibration(q, zeros, zeros, 0.0, zeros, np.ones(n), True, "", measured)
+    controller._finish_calibration(calibration, 0.0)
+    return q, measured
+
+
 def test_a_level_nobody_measured_has_the_band_the_law_bounds_it_with():
     """The observer's level error is the law's: ``unmeasured_friction_error`` until measured.
 
@@ -66,12 +80,7 @@ def test_a_level_nobody_measured_has_the_band_the_law_bounds_it_with():
     error = controller.observer.friction.relative_error
     np.testing.assert_array_equal(error, controller.law.friction_error)
     np.testing.assert_allclose(error, unmeasured)
-    q, n = robot.home(), robot.n_joints
-    measured = np.ones(n, dtype=bool)
-    measured[2] = False
-    zeros = np.zeros(n)
-    calibration = Calibration(q, zeros, zeros, 0.0, zeros, np.ones(n), True, "", measured)
-    controller._finish_calibration(calibration, 0.0)
+    _, measured = _calibrated_but_joint_3(controller)
     error = controller.observer.friction.relative_error
     np.testing.assert_array_equal(error, controller.law.friction_error)
     accuracy = controller.parameters.calibration.friction_accuracy
@@ -147,12 +156,8 @@ def test_a_joint_the_calibration_did_not_measure_keeps_all_of_its_gravity_uncert
     """
     robot = lt.robots.yumi()
     controller = lt.LeadThrough(robot, mode="active", dt=0.004, calibrate=True)
-    q, n = robot.home(), robot.n_joints
-    measured = np.ones(n, dtype=bool)
-    measured[2] = False
-    zeros = np.zeros(n)
-    calibration = Calibration(q, zeros, zeros, 0.0, zeros, np.ones(n), True, "", measured)
-    controller._finish_calibration(calibration, 0.0)
+    q, measured = _calibrated_but_joint_3(controller)
+    n = robot.n_joints
     gravity = controller.dynamics.gravity(q)
     assert abs(gravity[2]) > 1.0  # a joint whose gravity matters
     tolerance = controller.law.model_error.tolerance(gravity)
