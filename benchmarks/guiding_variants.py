@@ -25,6 +25,7 @@ from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.admittance import operator_weight
 from leadthrough.control.calibration import CalibrationParameters
 from leadthrough.estimation.observer import MomentumObserver, ObserverParameters
+from leadthrough.estimation.tool_force import fuse
 from observer_variants import SMOOTH_RATE
 
 #: A calibration that slides every joint 10 mrad at 0.1 rad/s (the default since it was
@@ -38,9 +39,13 @@ def _build(
     cls: type[lt.LeadThrough] = lt.LeadThrough,
     calibration: dict[str, Any] | None = None,
     dither: dict[str, Any] | None = None,
+    calibrate: bool = True,
     **fields: Any,
 ) -> lt.LeadThrough:
-    """The default controller of ``mode``; in active mode with ``fields`` changed."""
+    """The default controller of ``mode``; in active mode with ``fields`` changed.
+
+    ``calibrate``: whether it starts with the start-up calibration (both modes).
+    """
     parameters = lt.LeadThroughParameters()
     if mode == "active":
         changes = dict(fields)
@@ -49,8 +54,8 @@ def _build(
         if dither:
             changes["dither"] = dataclasses.replace(parameters.dither, **dither)  # type: ignore[arg-type]
         parameters = dataclasses.replace(parameters, **changes)
-        return cls(robot, mode=mode, dt=0.004, parameters=parameters, calibrate=True)
-    return lt.LeadThrough(robot, mode=mode, dt=0.004, parameters=parameters, calibrate=True)
+        return cls(robot, mode=mode, dt=0.004, parameters=parameters, calibrate=calibrate)
+    return lt.LeadThrough(robot, mode=mode, dt=0.004, parameters=parameters, calibrate=calibrate)
 
 
 def joint_estimates(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
@@ -253,3 +258,50 @@ def plain_admittance(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
 def true_torque_plain(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
     """:data:`PLAIN`, fed the twin's true operator torque: the law's own floor."""
     return _build(robot, mode, cls=_TrueTorque, **PLAIN)
+
+
+class _NoCreditAtRest(lt.LeadThrough):
+    """The law reads a second filter that credits no friction to a joint it calls at rest.
+
+    The same filter as the reported one (``observer``), the friction it takes as applied
+    the model's at the law's sliding velocity (``ActiveLaw.sliding_velocity``, zero below
+    ``rest_velocity``) instead of at the measured one; read together as the reported one
+    is, with the same stds. The reported estimate is unchanged.
+    """
+
+    def _build(self, robot: lt.RobotDescription, friction: lt.FrictionModel,
+               measured: Any = None) -> None:  # fmt: skip
+        super()._build(robot, friction, measured)
+        reported = self.observer
+        reading = MomentumObserver(self.dynamics, reported.friction, self.dt,
+                                   self.parameters.observer)  # fmt: skip
+        # the class's methods: _build runs again after a calibration and on reset
+        update = reported.update
+        operator_torque = functools.partial(type(self.law).operator_torque, self.law)
+
+        def both(q: Any, qd: Any, tau: Any, model: Any = None) -> Any:
+            credited = reported.friction.mean(self.law.sliding_velocity(qd), q)
+            reading.update(q, qd, tau, model, friction_mean=credited)
+            return update(q, qd, tau, model)
+
+        def from_reading(estimate: Any, q: Any, qd: Any, gravity: Any) -> Any:
+            own = reading.tau_ext_hat
+            if self.fusion is not None and self.model is not None:
+                fusion, std = self.fusion, self.joint_std
+                own, _ = fuse(own, std, self.model.tool_jacobian, fusion.other_std,
+                              fusion.parameters.force_std, np.empty(own.size),
+                              np.empty(own.size))  # fmt: skip
+            return operator_torque(own, q, qd, gravity)
+
+        reported.update = both  # type: ignore[method-assign]
+        self.law.operator_torque = from_reading  # type: ignore[method-assign]
+
+
+def no_credit_at_rest(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """:class:`_NoCreditAtRest` (README, *Friction credited to a creep*)."""
+    return _build(robot, mode, cls=_NoCreditAtRest)
+
+
+def no_credit_at_rest_uncalibrated(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """:func:`no_credit_at_rest` without the start-up calibration (passive: the same)."""
+    return _build(robot, mode, cls=_NoCreditAtRest, calibrate=False)

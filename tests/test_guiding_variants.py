@@ -18,7 +18,8 @@ FACTORIES = ("no_unwinding", "no_weighting", "full_residual", "long_stroke", "lo
              "strong_dither", "tool_wrench_prior", "smooth_rate_guiding",
              "no_friction_margin", "half_friction_margin",
              "three_quarter_friction_margin", "joint_estimates",
-             "plain_admittance", "own_rest_uncertainty")  # fmt: skip
+             "plain_admittance", "own_rest_uncertainty", "no_credit_at_rest",
+             "no_credit_at_rest_uncalibrated")  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -43,6 +44,29 @@ def test_a_variant_law_is_the_one_that_runs(robot, name):
     variant = _pushed(robot, getattr(guiding_variants, name)(robot, "active"))
     default = _pushed(robot, lt.LeadThrough(robot, mode="active"))
     assert np.max(np.abs(variant.operator_torque - default.operator_torque)) > 1e-3
+
+
+def test_without_credit_at_rest_a_creep_reads_no_push_and_the_report_stays(robot):
+    """Joint 4 creeping at 3 mrad/s, the motor holding gravity only, nobody pushing.
+
+    The default law reads the friction model at 3 mrad/s (≈ its level) as a push along
+    the creep; the variant's reads none of it (what is left, 0.1 Nm, is the share of
+    the other joints' readings the tool force gives it); the reported estimate is the same.
+    """
+    dynamics = lt.Dynamics(robot)
+    default = lt.LeadThrough(robot, mode="active", dt=0.004)
+    variant = guiding_variants.no_credit_at_rest_uncalibrated(robot, "active")
+    q0, qd = np.array(robot.home(), dtype=float), np.zeros(robot.n_joints)
+    qd[3] = 0.003
+    for k in range(300):
+        q = q0 + k * 0.004 * qd
+        model = dynamics.snapshot(q, qd)
+        for controller in (default, variant):
+            controller.step(q, qd, model.gravity - model.coriolis_drift)
+    np.testing.assert_array_equal(variant.tau_ext_hat, default.tau_ext_hat)
+    level = default.friction.coulomb_level(q)[3]
+    assert default.law.residual[3] > 0.5 * level
+    assert abs(variant.law.residual[3]) < 0.2 * level  # what the tool force spreads
 
 
 @pytest.mark.parametrize(

@@ -306,6 +306,27 @@ def test_estimate_flips_with_the_external_torque(data, dynamics, friction):
     np.testing.assert_allclose(plain[after], data.tau_ext[after], atol=0.1)
 
 
+def test_a_given_friction_mean_moves_the_estimate_only(dynamics, friction):
+    """A creep at 3 mrad/s, the motor holding gravity and Coriolis, no friction applied.
+
+    From ṗ = 0 the filter settles at τ̂ = G − Cᵀq̇ term + mean_f − τ: the model's friction
+    at the velocity it is told, read as a push (≈ τ_C at 3 mrad/s), or nothing at a
+    sliding velocity of 0. Its std and error_std stay those of the measured velocity.
+    """
+    q, qd = dynamics.robot.home(), np.full(N, 0.003)
+    model = dynamics.snapshot(q, qd)
+    tau = model.gravity - model.coriolis_drift
+    credited, sliding = (MomentumObserver(dynamics, friction, DT) for _ in range(2))
+    for _ in range(500):
+        credited.update(q, qd, tau, model)
+        sliding.update(q, qd, tau, model, friction_mean=np.zeros(N))
+    np.testing.assert_allclose(credited.tau_ext_hat, friction.mean(qd, q), atol=1e-6)
+    assert np.all(credited.tau_ext_hat > 0.5 * friction.coulomb)
+    np.testing.assert_allclose(sliding.tau_ext_hat, 0.0, atol=1e-6)
+    np.testing.assert_array_equal(sliding.std, credited.std)
+    np.testing.assert_array_equal(sliding.error_std, credited.error_std)
+
+
 def test_time_varying_std_smaller_moving_than_still(data, dynamics, friction):
     """The time-varying filter is more certain while moving than at stand-still."""
     _, moving_std = run(make_observer("time_varying", dynamics, friction), *_inputs(data))

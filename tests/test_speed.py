@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
+from leadthrough.control.admittance import dead_zone
 from leadthrough.estimation.observer import MomentumObserver
 from leadthrough.friction.model import FrictionModel
 from leadthrough.safety.checks import FrozenEncoders, in_range, within_bounds
@@ -27,8 +28,11 @@ def yumi() -> lt.RobotDescription:
     return lt.robots.yumi()
 
 
-def _observer_run(yumi, friction: FrictionModel, compiled: bool) -> np.ndarray:
-    """τ̂_ext and std over 5000 seeded random periods, with a reset every 1000."""
+def _observer_run(yumi, friction: FrictionModel, compiled: bool, sliding: bool) -> np.ndarray:
+    """τ̂_ext, std and error_std over 5000 seeded random periods, with a reset every 1000.
+
+    ``sliding``: the friction taken as applied is the mean at the law's sliding velocity.
+    """
     rng = np.random.default_rng(3)
     dynamics = lt.Dynamics(yumi)
     observer = MomentumObserver(dynamics, friction, 0.004)
@@ -39,18 +43,21 @@ def _observer_run(yumi, friction: FrictionModel, compiled: bool) -> np.ndarray:
             observer.reset()
         q = rng.uniform(yumi.q_min, yumi.q_max)
         qd = rng.normal(0.0, (1e-3, 0.05, 1.0)[k % 3], yumi.n_joints)
-        estimate = observer.update(q, qd, rng.normal(0.0, 5.0, yumi.n_joints))
-        rows.append(np.concatenate([estimate, observer.std]))
+        mean = friction.mean(dead_zone(qd, 0.01), q) if sliding else None
+        estimate = observer.update(q, qd, rng.normal(0.0, 5.0, yumi.n_joints),
+                                   friction_mean=mean)  # fmt: skip
+        rows.append(np.concatenate([estimate, observer.std, observer.error_std]))
     return np.array(rows)
 
 
-def test_compiled_observer_step_equals_the_numpy_reference(yumi):
+@pytest.mark.parametrize("sliding", [False, True], ids=["measured", "sliding mean"])
+def test_compiled_observer_step_equals_the_numpy_reference(yumi, sliding):
     """Time-varying filter, with a position-dependent friction too: equal to 1e-12."""
     nominal = FrictionModel.from_robot(yumi)
     cable = replace(nominal, position_linear=np.full(7, 0.1), position_quadratic=np.full(7, 0.05))
     for friction in (nominal, cable):
-        compiled = _observer_run(yumi, friction, compiled=True)
-        reference = _observer_run(yumi, friction, compiled=False)
+        compiled = _observer_run(yumi, friction, compiled=True, sliding=sliding)
+        reference = _observer_run(yumi, friction, compiled=False, sliding=sliding)
         np.testing.assert_allclose(compiled, reference, rtol=1e-12, atol=1e-12)
 
 

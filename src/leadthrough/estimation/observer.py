@@ -204,6 +204,7 @@ class MomentumObserver:
                                     self._q11_torque[0] if n else 0.0, self._q12[0] if n else 0.0,
                                     self._q22[0] if n else 0.0, self._noise_d])  # fmt: skip
         self._terms = np.zeros((4, n))  # the friction terms of a period, when not given
+        self._no_mean = np.zeros(n)  # the compiled step's ``credited`` when none is given
         self.reset()
 
     # --- public state ------------------------------------------------------------------
@@ -264,6 +265,7 @@ class MomentumObserver:
         tau: ArrayLike,
         model: ModelSnapshot | None = None,
         terms: FloatArray | None = None,
+        friction_mean: FloatArray | None = None,
     ) -> FloatArray:
         """One filter step with the state now and the motor torque of the last period.
 
@@ -276,11 +278,19 @@ class MomentumObserver:
             terms: The friction model's terms at (q̇, q) of this period, (4, n)
                 (:meth:`~leadthrough.friction.model.FrictionModel.terms_into`), if the
                 caller has them; else computed here.
+            friction_mean: The friction torque the filter takes as applied [Nm], if not
+                the model's mean at q̇ (its std, and with it the gains and
+                :attr:`error_std`, stay the model's at q̇): a caller that knows better
+                whether the joint slides passes its own (e.g. none below a rest
+                velocity: README, *Friction credited to a creep*).
 
         Returns:
             The estimated external torque [Nm].
         """
         q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
+        if friction_mean is not None:
+            friction_mean = np.ascontiguousarray(np.broadcast_to(friction_mean, qd.shape),
+                                                 dtype=float)  # fmt: skip
         self._sample = (q, qd)  # for error_std, computed when read (or by the compiled step)
         self._error_in_filter = False
         if model is None:
@@ -290,18 +300,22 @@ class MomentumObserver:
             if qd.shape == q.shape == tau.shape:  # time-varying: one compiled pass
                 if terms is None:
                     terms = self.friction.terms_into(qd, q, self._terms)
+                credited = self._no_mean if friction_mean is None else friction_mean
                 _time_varying_step(self._filter, tau, model.mass, qd, model.coriolis_drift,
-                                   model.gravity, terms, self.friction.noise_std,
-                                   self._level_std, self._constants)  # fmt: skip
+                                   model.gravity, terms, credited, friction_mean is not None,
+                                   self.friction.noise_std, self._level_std,
+                                   self._constants)  # fmt: skip
                 self._error_in_filter = True
                 return self._tau.copy()
         momentum = model.mass @ qd
         if self._smooth is not None:
-            return self._smooth_rate_update(q, qd, tau, model, momentum)
+            return self._smooth_rate_update(q, qd, tau, model, momentum, friction_mean)
         if self._levels is None:
-            friction_mean, friction_std = self.friction.mean_and_std(qd, q)
+            model_mean, friction_std = self.friction.mean_and_std(qd, q)
         else:  # the two-level gains need no friction std
-            friction_mean, friction_std = self.friction.mean(qd, q), None
+            model_mean, friction_std = self.friction.mean(qd, q), None
+        if friction_mean is None:
+            friction_mean = model_mean
         if not self._initialised:
             self._p[:] = momentum
             self._previous_drift[:] = model.coriolis_drift - model.gravity - friction_mean
@@ -321,12 +335,13 @@ class MomentumObserver:
 
     def _smooth_rate_update(
         self, q: FloatArray, qd: FloatArray, tau: ArrayLike, model: ModelSnapshot,
-        momentum: FloatArray,
+        momentum: FloatArray, given: FloatArray | None = None,
     ) -> FloatArray:  # fmt: skip
         """One step of the smooth-rate variant (same input, eqs. (1)–(3) of its module)."""
         assert self._smooth is not None
         friction_mean, friction_std = self.friction.mean_and_std(qd, q)
-        drift = model.coriolis_drift - model.gravity - friction_mean
+        credited = friction_mean if given is None else given
+        drift = model.coriolis_drift - model.gravity - credited
         if self._initialised:
             u = np.broadcast_to(np.asarray(tau, dtype=float), self._p.shape)
             self._smooth.step(self._p, self._tau, u + 0.5 * (drift + self._previous_drift),
@@ -398,8 +413,8 @@ class MomentumObserver:
 
 
 @kernel
-def _time_varying_step(state, tau, mass, qd, coriolis_drift, gravity, terms, noise_std,
-                       level_std, constants):  # fmt: skip
+def _time_varying_step(state, tau, mass, qd, coriolis_drift, gravity, terms, credited, given,
+                       noise_std, level_std, constants):  # fmt: skip
     """One step of the time-varying filter, all joints, in place (compiled, ~1 µs).
 
     The same arithmetic, in the same order, as :meth:`MomentumObserver.update` with
@@ -410,7 +425,9 @@ def _time_varying_step(state, tau, mass, qd, coriolis_drift, gravity, terms, noi
     covariance with Q_m = scale · std_f², correct the state with the gains. ``state``
     is ``MomentumObserver._filter`` (rows p, τ̂_ext, previous drift, P11, P12, P22, std,
     and :attr:`~MomentumObserver.error_std`, written here), ``terms`` are the friction
-    terms, rows as :meth:`~leadthrough.friction.model.FrictionModel.terms_into`.
+    terms, rows as :meth:`~leadthrough.friction.model.FrictionModel.terms_into`;
+    ``credited`` is the friction the filter takes as applied when ``given`` (else their
+    mean).
     """
     dt, scale, q11_torque, q12, q22, noise_d = constants
     p, tau_hat, previous_drift, cov, std = state[0], state[1], state[2], state[3:6], state[6]
@@ -421,10 +438,12 @@ def _time_varying_step(state, tau, mass, qd, coriolis_drift, gravity, terms, noi
         for j in range(n):
             momentum += mass[i, j] * qd[j]
         half_level, upper, lower = 0.5 * terms[0, i], terms[2, i], terms[3, i]
-        friction_mean = half_level * (upper + lower) + terms[1, i]
         coulomb_std = half_level * (upper - lower)
         friction_std = math.hypot(coulomb_std, noise_std[i])
+        friction_mean = half_level * (upper + lower) + terms[1, i]
         error_std[i] = math.hypot(coulomb_std, level_std[i] * friction_mean)
+        if given:
+            friction_mean = credited[i]
         drift = coriolis_drift[i] - gravity[i] - friction_mean
         u = tau[i] + 0.5 * (drift + previous_drift[i])
         previous_drift[i] = drift
