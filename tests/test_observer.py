@@ -309,9 +309,9 @@ def test_estimate_flips_with_the_external_torque(data, dynamics, friction):
 def test_a_given_friction_mean_moves_the_estimate_only(dynamics, friction):
     """A creep at 3 mrad/s, the motor holding gravity and Coriolis, no friction applied.
 
-    From ṗ = 0 the filter settles at τ̂ = G − Cᵀq̇ term + mean_f − τ: the model's friction
-    at the velocity it is told, read as a push (≈ τ_C at 3 mrad/s), or nothing at a
-    sliding velocity of 0. Its std and error_std stay those of the measured velocity.
+    From ṗ = 0 the filter settles at τ̂ = G + mean_f − τ − (the Coriolis drift term): the
+    model's friction at 3 mrad/s (≈ τ_C) read as a push, or nothing when told a friction of
+    0. Its std and error_std stay those of the measured velocity.
     """
     q, qd = dynamics.robot.home(), np.full(N, 0.003)
     model = dynamics.snapshot(q, qd)
