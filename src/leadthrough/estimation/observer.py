@@ -335,12 +335,15 @@ class MomentumObserver:
 
     def _smooth_rate_update(
         self, q: FloatArray, qd: FloatArray, tau: ArrayLike, model: ModelSnapshot,
-        momentum: FloatArray, given: FloatArray | None = None,
+        momentum: FloatArray, applied_friction: FloatArray | None = None,
     ) -> FloatArray:  # fmt: skip
-        """One step of the smooth-rate variant (same input, eqs. (1)–(3) of its module)."""
+        """One step of the smooth-rate variant (same input, eqs. (1)–(3) of its module).
+
+        ``applied_friction``: the caller's ``friction_mean`` of :meth:`update`, if any.
+        """
         assert self._smooth is not None
         friction_mean, friction_std = self.friction.mean_and_std(qd, q)
-        credited = friction_mean if given is None else given
+        credited = friction_mean if applied_friction is None else applied_friction
         drift = model.coriolis_drift - model.gravity - credited
         if self._initialised:
             u = np.broadcast_to(np.asarray(tau, dtype=float), self._p.shape)
@@ -426,8 +429,8 @@ def _time_varying_step(state, tau, mass, qd, coriolis_drift, gravity, terms, cre
     is ``MomentumObserver._filter`` (rows p, τ̂_ext, previous drift, P11, P12, P22, std,
     and :attr:`~MomentumObserver.error_std`, written here), ``terms`` are the friction
     terms, rows as :meth:`~leadthrough.friction.model.FrictionModel.terms_into`;
-    ``credited`` is the friction the filter takes as applied when ``given`` (else their
-    mean).
+    ``credited`` is the friction the filter takes as applied when ``given`` (the caller's
+    ``friction_mean``), else the mean of ``terms``.
     """
     dt, scale, q11_torque, q12, q22, noise_d = constants
     p, tau_hat, previous_drift, cov, std = state[0], state[1], state[2], state[3:6], state[6]
