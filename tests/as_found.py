@@ -4,6 +4,7 @@ import dataclasses
 
 from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.calibration import CalibrationParameters
+from leadthrough.control.dither import DitherParameters
 
 #: Before: 5 mrad at 0.05 rad/s, inside the plants' Stribeck range, and a level refused
 #: outside 1 / 1.75–1.75× the model's.
@@ -32,3 +33,13 @@ def friction_margin_share(monkeypatch, share: float = 1.0) -> None:
     The default removes all of it (``ActiveLaw.margin_share``); 0 removes none.
     """
     monkeypatch.setattr(ActiveLaw, "margin_share", share)
+
+
+def two_second_park(monkeypatch) -> None:
+    """Every ``DitherParameters()`` built during the test parks after 2 s of rest, as before.
+
+    Parked after 0.5 s, the dither ends the creeps some of these cases showed.
+    """
+    before = dataclasses.replace(DitherParameters(), park_time=2.0)
+    defaults = tuple(getattr(before, item.name) for item in dataclasses.fields(before))
+    monkeypatch.setattr(DitherParameters.__init__, "__defaults__", defaults)

@@ -12,6 +12,8 @@ from leadthrough.friction.model import FrictionModel
 
 N = 7
 DT = 0.004
+#: The thesis' dither, never parked: the wave and each joint's rest (the park: below).
+NEVER_PARKED = DitherParameters(park_time=None)
 
 
 @pytest.fixture(scope="module")
@@ -36,7 +38,7 @@ def run_still(dither: Dither, steps: int, q=None) -> np.ndarray:
 @pytest.mark.parametrize("frequency", [15.0, 10.0, 7.0, 25.0])
 def test_square_wave_edges_at_the_right_times(friction, frequency):
     """Over 1 s at rest, each joint follows the ±1 square wave at `frequency` (2f − 1 edges)."""
-    dither = Dither(friction, DT, DitherParameters(frequency=frequency))
+    dither = Dither(friction, DT, DitherParameters(frequency=frequency, park_time=None))
     steps = round(1.0 / DT)
     torque = run_still(dither, steps)
     wave = torque / (0.3 * friction.coulomb)
@@ -51,8 +53,8 @@ def test_square_wave_edges_at_the_right_times(friction, frequency):
 
 
 def test_default_wave_is_15_hz_and_zero_mean(friction):
-    """The default dither changes sign 29 times in one second and averages to zero."""
-    dither = Dither(friction, DT)
+    """The default wave changes sign 29 times in one second and averages to zero."""
+    dither = Dither(friction, DT, NEVER_PARKED)
     torque = run_still(dither, round(1.0 / DT))
     assert np.count_nonzero(np.diff(np.sign(torque[:, 0]))) == 29
     assert np.all(np.abs(torque.mean(axis=0)) <= 0.02 * 0.3 * friction.coulomb)
@@ -113,8 +115,8 @@ def test_off_at_once_on_a_moving_joint_only(friction):
 @pytest.mark.parametrize("joint", [0, 3, 6])
 def test_back_only_after_rest_time(friction, joint):
     """After motion stops, the joint's dither stays off for rest_time, then resumes in phase."""
-    dither = Dither(friction, DT)
-    reference = Dither(friction, DT)
+    dither = Dither(friction, DT, NEVER_PARKED)
+    reference = Dither(friction, DT, NEVER_PARKED)
     rest_steps = round(0.2 / DT)  # default rest_time 0.2 s
     moving = np.zeros(N)
     moving[joint] = 0.3
@@ -158,7 +160,7 @@ def test_brief_rests_do_not_restart_the_dither(friction):
 )
 def test_rest_time_counted_in_whole_periods(friction, dt, rest_time):
     """The dither returns after exactly round(rest_time / dt) still samples."""
-    dither = Dither(friction, dt, DitherParameters(rest_time=rest_time))
+    dither = Dither(friction, dt, DitherParameters(rest_time=rest_time, park_time=None))
     moving = np.full(N, 0.5)
     dither.step(moving)
     rest_steps = round(rest_time / dt)

@@ -200,10 +200,34 @@ def test_dither_parks_when_nobody_guides_and_resumes_on_motion(friction):
     assert dither.parked and np.all(np.array(parked) == 0.0)
     moving = still.copy()
     moving[2] = 0.1
-    resumed = dither.step(moving)
-    assert not dither.parked and resumed[2] == 0.0
+    resumed = [dither.step(moving) for _ in range(2)]  # moving now and over a dither period
+    assert not dither.parked and resumed[-1][2] == 0.0
     later = [dither.step(moving) for _ in range(round(settings.rest_time / DT))][-1]
     assert np.all(np.abs(np.delete(later, 2)) > 0.0)  # the resting joints dither again
+
+
+@pytest.mark.parametrize("slow", [True, False], ids=["either-velocity", "raw-velocity"])
+def test_the_dithers_own_slips_do_not_keep_it_from_parking(friction, slow, monkeypatch):
+    """A resting joint that slips above moving_velocity one sample in ten still parks.
+
+    The park counts a joint as moving only if it moves now and over the last dither
+    period (the low-passed velocity): a slip, the dither's own doing, moves it by the
+    first only. With the raw velocity alone (pole 0) every slip restarts the wait and the
+    dither never parks. A joint that really moves, slowly (1.5× moving_velocity), keeps
+    it going either way.
+    """
+    if not slow:
+        monkeypatch.setattr(Dither, "slow_pole", property(lambda self: 0.0))
+    settings = DitherParameters(park_time=0.5)
+    slips, moves = Dither(friction, DT, settings), Dither(friction, DT, settings)
+    speed = settings.moving_velocity
+    for k in range(round(1.5 / DT)):
+        slip, move = np.zeros(N), np.zeros(N)
+        slip[0] = 3.0 * speed if k % 10 == 0 else 0.2 * speed
+        move[0] = 1.5 * speed
+        slips.step(slip)
+        moves.step(move)
+    assert slips.parked == slow and not moves.parked
 
 
 def test_dither_without_park_time_never_parks(friction):

@@ -18,7 +18,12 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from as_found import friction_margin_share, own_rest_bands, slow_calibration_motion
+from as_found import (
+    friction_margin_share,
+    own_rest_bands,
+    slow_calibration_motion,
+    two_second_park,
+)
 from leadthrough.control import active_law, calibration
 from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.admittance import AdmittanceState
@@ -46,6 +51,13 @@ COASTING = Case("dry", 3, "relaxed", "circle")
 #: 0.24): friction stopped it 20 mrad short of its reference, and the PD's spring pushed it
 #: (0.17 Nm) while the dither vibrated it, until the dither parked.
 SPRING_HELD = Case("lugre", 1, "stiff", "down-in")
+#: Uncalibrated (the model's gravity off by the drive gains and masses), joint 3 of this
+#: LuGre plant creeps 0.6–0.8 mrad/s under the dither after the release, in both modes,
+#: until the dither parks: 1.0 / 1.3 mrad (passive / active) with a park time of 2 s.
+DITHERED_CREEP = Case("lugre", 15, "stiff", "upwards")
+#: Uncalibrated, active mode reads the friction the observer credits to joint 1's dithered
+#: creep as a push, and the creep grows to 1–4 mrad/s: 4.4 mrad with a park time of 2 s.
+CREDITED_CREEP = Case("lugre", 12, "stiff", "down-in")
 
 
 #: Every friction level 0.8 of the model's, uniform along the travel: the edge of the 0.2 a
@@ -199,12 +211,14 @@ def test_released_active_arm_stops_once_nothing_sustains_its_motion():
     assert result.stop_time <= 0.5 and result.drift < 1e-3
 
 
-def test_damping_on_the_operator_weight_lets_the_released_arm_coast():
+def test_damping_on_the_operator_weight_lets_the_released_arm_coast(monkeypatch):
     """The drag the law reads once nobody holds the arm kept the damping low: it coasted.
 
     Without the unwinding of a lagging joint's reference, as when the case was found:
-    that stops the coasting arm too (its references relax to the joints friction slows).
+    that stops the coasting arm too (its references relax to the joints friction slows);
+    and with the dither parked after 2 s, as then: parked after 0.5 s it ends the coast.
     """
+    two_second_park(monkeypatch)
 
     def factory(robot, mode):
         parameters = lt.LeadThroughParameters(unwind_time=None)
@@ -236,9 +250,11 @@ def test_a_stopped_joint_is_not_held_against_stiction_by_the_tracking_spring(set
     together as a force at the tool (the default) the held reference creeps 0.54 mrad,
     the settled one 0.34. Without the unwinding of a lagging joint's reference, as when
     the case was found: with it the held reference creeps 0.59 mrad, the settled 0.37. With
-    the calibration of the time.
+    the calibration and the dither (parked after 2 s) of the time: parked after 0.5 s,
+    the dither ends the creep either way.
     """
     _calibration_of_the_time(monkeypatch)
+    two_second_park(monkeypatch)
     if not settled:
         monkeypatch.setattr(active_law, "settled_reference", lambda q_ref, *args: q_ref)
 
@@ -432,3 +448,26 @@ def test_a_refused_calibration_that_read_a_level_low_still_stops_the_released_ar
     result = run_case(READ_LOW, "active")
     assert not result.calibrated
     _runs_on_or_stops(result, runs, beyond=0.01)
+
+
+def _parked_after(park_time):
+    """Uncalibrated controllers whose dither parks after ``park_time`` [s] (None: default)."""
+    parameters = lt.LeadThroughParameters()
+    if park_time is not None:
+        dither = dataclasses.replace(parameters.dither, park_time=park_time)
+        parameters = dataclasses.replace(parameters, dither=dither)
+    return lambda robot, mode: LeadThrough(robot, mode=mode, dt=0.004, parameters=parameters)
+
+
+@pytest.mark.parametrize("case, mode", [(DITHERED_CREEP, "passive"), (DITHERED_CREEP, "active"),
+                                        (CREDITED_CREEP, "active")], ids=str)  # fmt: skip
+def test_the_dither_parks_before_a_creep_leaves_the_drift_budget(case, mode):
+    """Released, uncalibrated: the dithered creep ends when the dither parks, < 1 mrad."""
+    result = run_case(case, mode, _parked_after(None))
+    assert result.stop_time <= 0.5 and result.drift < 1e-3
+
+
+@pytest.mark.parametrize("case", [DITHERED_CREEP, CREDITED_CREEP], ids=str)
+def test_parked_after_two_seconds_the_dithered_creep_leaves_the_drift_budget(case):
+    """The previous park time (2 s of rest): the same creeps run past 1 mrad."""
+    assert run_case(case, "active", _parked_after(2.0)).drift > 1e-3

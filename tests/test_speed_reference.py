@@ -22,8 +22,9 @@ if it stands out of the model's gravity error (``CalibrationRun.payload``), then
 calibration sliding 10 mrad at 0.1 rad/s, above the Stribeck range (``CalibrationParameters``),
 then a resting joint's Coulomb band in the law narrowed by the joints read together
 (``ActiveLaw.narrow``), then the observer's band taking each level's error from the law
-(``LeadThrough._build``: a level nothing measured known to 0.35). A faster step must
-reproduce them.
+(``LeadThrough._build``: a level nothing measured known to 0.35), then the dither parked
+after 0.5 s of rest judged on either velocity (``DitherParameters.park_time``,
+``Dither.slow_velocity``). A faster step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

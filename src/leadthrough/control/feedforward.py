@@ -174,8 +174,10 @@ class PassiveFeedForward:
             dither_settings.rest_time if dither_settings else 0.0,
             math.inf if park_time is None else park_time, dt, law.dead_band, law.fraction,
             law.full_velocity, self.compensation.pole,
-            math.nan if gravity_uncertainty is None else gravity_uncertainty])  # fmt: skip
+            math.nan if gravity_uncertainty is None else gravity_uncertainty,
+            self.dither.slow_pole if self.dither else 0.0])  # fmt: skip
         self._no_rest = np.full(n, np.nan)  # the dither's state when there is no dither
+        self._no_slow = np.zeros(n)
         self._no_reference = np.zeros(n)
         self._no_active = np.zeros(n, dtype=bool)
 
@@ -219,13 +221,14 @@ class PassiveFeedForward:
         compensation, errors = self.compensation, (self.friction_error, reference)
         level = compensation.friction.coulomb_level(q)
         if dither is None:
-            _feed_forward_step(velocity, level, gravity, *errors, self._no_rest,
+            _feed_forward_step(velocity, level, gravity, *errors, self._no_rest, self._no_slow,
                                self._no_active, compensation.filtered, parts, False, 0.0,
                                math.nan, 0.0, self._scalars)  # fmt: skip
         else:
             amplitude = wave * dither.parameters.amplitude
             dither.quiet_since = _feed_forward_step(velocity, level, gravity, *errors,
-                dither.rest_since, dither.active, compensation.filtered, parts, True, now,
+                dither.rest_since, dither.slow_velocity, dither.active, compensation.filtered,
+                parts, True, now,
                 dither.quiet_since, amplitude, self._scalars)  # fmt: skip
         torques = FeedForwardTorques(gravity, parts[0], parts[1], self._measured(parts[1]))
         torques.__dict__["total"] = parts[2]  # the cached sum, computed by the kernel
@@ -267,19 +270,22 @@ class PassiveFeedForward:
 
 #: Scalars of :func:`_feed_forward_step`, in order (``park_time`` inf: never parks).
 FEED_FORWARD_SCALARS = ("moving_velocity", "rest_time", "park_time", "dt", "dead_band",
-                        "fraction", "full_velocity", "pole", "gravity_uncertainty")  # fmt: skip
+                        "fraction", "full_velocity", "pole", "gravity_uncertainty",
+                        "slow_pole")  # fmt: skip
 
 
 @kernel
-def _feed_forward_step(qd, level, gravity, friction_error, reference, rest_since, active,
-                       filtered, parts, dithering, now, quiet_since, amplitude,
+def _feed_forward_step(qd, level, gravity, friction_error, reference, rest_since, slow,
+                       active, filtered, parts, dithering, now, quiet_since, amplitude,
                        scalars):  # fmt: skip
     """One period of :class:`PassiveFeedForward`, in place; returns the new ``quiet_since``.
 
     The same decisions and arithmetic, in the same order, as the NumPy reference
     (:meth:`Dither.decide`, the dead-band widened on the dithered joints, then
     :meth:`CoulombCompensation.step`): rest times (``np.fmin``, NaN while moving), the
-    park (``quiet_since`` NaN: not every joint rests; ``park_time`` inf: never), the
+    velocity low-passed over a dither period (``slow``, a NaN or infinite sample leaves it
+    and moves), the park (a joint rests if either velocity is below ``moving_velocity``;
+    ``quiet_since`` NaN: not every joint rests; ``park_time`` inf: never), the
     rested joints and their dither ``amplitude · τ_C(q)`` [Nm] (``amplitude`` signed by
     the wave), each "lasted" test ``elapsed + dt >= duration − dt / 2``; the compensation
     ramp ends at ``max(q̇₁, 2 q̇₀)``, the level ``ε τ_C`` capped by
@@ -291,17 +297,23 @@ def _feed_forward_step(qd, level, gravity, friction_error, reference, rest_since
     """
     moving_velocity, rest_time, park_time, dt = scalars[0], scalars[1], scalars[2], scalars[3]
     dead_band, fraction, full_velocity, pole = scalars[4], scalars[5], scalars[6], scalars[7]
-    gravity_uncertainty = scalars[8]
+    gravity_uncertainty, slow_pole = scalars[8], scalars[9]
     capped = gravity_uncertainty == gravity_uncertainty  # not NaN
     n = qd.shape[0]
     if dithering:
         every_joint_rests = True
         for i in range(n):
-            if abs(qd[i]) < moving_velocity:
+            still = abs(qd[i]) < moving_velocity
+            if still:
                 since = rest_since[i]
                 rest_since[i] = now if since != since or now < since else since  # np.fmin
             else:
-                rest_since[i], every_joint_rests = math.nan, False
+                rest_since[i] = math.nan
+            finite = abs(qd[i]) < math.inf  # NaN compares False
+            if finite:
+                slow[i] = slow_pole * slow[i] + (1.0 - slow_pole) * qd[i]
+            if not (still or (finite and abs(slow[i]) < moving_velocity)):
+                every_joint_rests = False
         if not every_joint_rests:
             quiet_since = math.nan
         elif quiet_since != quiet_since:
