@@ -228,8 +228,7 @@ class PassiveFeedForward:
             amplitude = wave * dither.parameters.amplitude
             dither.quiet_since = _feed_forward_step(velocity, level, gravity, *errors,
                 dither.rest_since, dither.slow_velocity, dither.active, compensation.filtered,
-                parts, True, now,
-                dither.quiet_since, amplitude, self._scalars)  # fmt: skip
+                parts, True, now, dither.quiet_since, amplitude, self._scalars)  # fmt: skip
         torques = FeedForwardTorques(gravity, parts[0], parts[1], self._measured(parts[1]))
         torques.__dict__["total"] = parts[2]  # the cached sum, computed by the kernel
         return torques
