@@ -17,9 +17,13 @@ def slow_calibration_motion(monkeypatch) -> None:
     The default calibration of ``LeadThroughParameters`` included, so a case runs through
     the public API exactly as it did when it was found.
     """
-    slow = CalibrationParameters(**SLOW)
-    defaults = tuple(getattr(slow, item.name) for item in dataclasses.fields(slow))
-    monkeypatch.setattr(CalibrationParameters.__init__, "__defaults__", defaults)
+    _built_as(monkeypatch, CalibrationParameters(**SLOW))
+
+
+def _built_as(monkeypatch, before) -> None:
+    """Every instance of ``before``'s dataclass built during the test defaults to its fields."""
+    defaults = tuple(getattr(before, item.name) for item in dataclasses.fields(before))
+    monkeypatch.setattr(type(before).__init__, "__defaults__", defaults)
 
 
 def own_rest_bands(monkeypatch) -> None:
@@ -40,6 +44,4 @@ def two_second_park(monkeypatch) -> None:
 
     Parked after 0.5 s, the dither ends the creeps some of these cases showed.
     """
-    before = dataclasses.replace(DitherParameters(), park_time=2.0)
-    defaults = tuple(getattr(before, item.name) for item in dataclasses.fields(before))
-    monkeypatch.setattr(DitherParameters.__init__, "__defaults__", defaults)
+    _built_as(monkeypatch, DitherParameters(park_time=2.0))
