@@ -40,8 +40,9 @@ def friction_margin_share(monkeypatch, share: float = 1.0) -> None:
 
 
 def two_second_park(monkeypatch) -> None:
-    """Every ``DitherParameters()`` built during the test parks after 2 s of rest, as before.
+    """Every ``DitherParameters()`` built during the test parks after 2 s of rest only, as before.
 
-    Parked after 0.5 s, the dither ends the creeps some of these cases showed.
+    Parked on the creep itself (``creep``), the dither ends the creeps some of these
+    cases showed.
     """
-    _built_as(monkeypatch, DitherParameters(park_time=2.0))
+    _built_as(monkeypatch, DitherParameters(park_time=2.0, creep=None))

@@ -155,6 +155,8 @@ def _feed_forward_run(parameters: DitherParameters | None, clock: bool, compiled
     """Parts, total and dither state over 10 000 seeded periods (NaN speeds too).
 
     ``capped``: a compensation ceiling, with gravity references of every size (or none).
+    The pose changes with each phase of :func:`_velocities`; in half the phases every
+    joint creeps, at up to 0.3 mrad/s (the dither's creep limit crossed or not).
     """
     robot = lt.robots.yumi()
     rng = np.random.default_rng(21)
@@ -164,7 +166,10 @@ def _feed_forward_run(parameters: DitherParameters | None, clock: bool, compiled
     feed_forward.compiled = compiled
     dither, rows = feed_forward.dither, []
     for k in range(10000):
-        q = robot.home() + rng.normal(0.0, 0.5, 7)
+        if k % 700 == 0:
+            pose = robot.home() + rng.normal(0.0, 0.5, 7)
+            creep = rng.choice([0.0, 3e-4]) * rng.random(7)  # [rad/s]
+        q = pose + creep * 0.004 * (k % 700) + rng.normal(0.0, 1e-5, 7)
         qd = _velocities(rng, k, 7) * (1.0, 0.3)[k % 2]  # through the dead-band and the ramp
         if k % 997 == 5:
             qd[k % 7] = np.nan  # a NaN speed: moving, as in NumPy
@@ -180,18 +185,19 @@ def _feed_forward_run(parameters: DitherParameters | None, clock: bool, compiled
 
 
 @pytest.mark.parametrize(
-    "park_time, clock, dithered, delay, capped",
+    "park_time, creep, clock, dithered, delay, capped",
     [
-        (2.0, True, True, None, False),
-        (None, True, True, 2, False),
-        (0.5, False, True, 1, True),
-        (2.0, True, False, 2, True),
+        (2.0, 2e-4, True, True, None, False),
+        (None, 2e-4, True, True, 2, False),
+        (0.5, None, False, True, 1, True),
+        (None, None, True, True, None, False),
+        (2.0, 2e-4, True, False, 2, True),
     ],
 )
-def test_compiled_feed_forward_equals_the_numpy_reference(park_time, clock, dithered, delay,
-                                                          capped):  # fmt: skip
-    """10 000 periods (rest, park, joints starting and stopping): same torques, same state."""
-    parameters = DitherParameters(park_time=park_time) if dithered else None
+def test_compiled_feed_forward_equals_the_numpy_reference(park_time, creep, clock, dithered,
+                                                          delay, capped):  # fmt: skip
+    """10 000 periods (rest, park, creep, joints starting and stopping): same torques, state."""
+    parameters = DitherParameters(park_time=park_time, creep=creep) if dithered else None
     compiled = _feed_forward_run(parameters, clock, True, delay, capped)
     reference = _feed_forward_run(parameters, clock, False, delay, capped)
     if capped:  # the ceiling binds in some periods, not in all
@@ -201,7 +207,7 @@ def test_compiled_feed_forward_equals_the_numpy_reference(park_time, clock, dith
         assert 0.05 < np.mean(lower[moving]) < 0.95
     if dithered:
         assert 0.05 < np.mean(reference[:, 21:28]) < 0.95  # both decisions are taken
-        assert reference[:, 28].any() == (park_time is not None)
+        assert reference[:, 28].any() == (park_time is not None or creep is not None)
     compensating = np.abs(reference[:, :7]) > 1e-9
     assert 0.05 < np.mean(compensating) < 0.95  # both sides of the dead-band
     np.testing.assert_allclose(compiled, reference, rtol=1e-12, atol=1e-12, equal_nan=True)

@@ -24,7 +24,9 @@ then a resting joint's Coulomb band in the law narrowed by the joints read toget
 (``ActiveLaw.narrow``), then the observer's band taking each level's error from the law
 (``LeadThrough._build``: a level nothing measured known to 0.35), then the dither parked
 after 0.5 s of rest judged on either velocity (``DitherParameters.park_time``,
-``Dither.slow_velocity``). A faster step must reproduce them.
+``Dither.slow_velocity``), then the dither parked as soon as a resting joint creeps 0.2
+mrad, and otherwise after 2 s (``DitherParameters.creep``). A faster step must reproduce
+them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

@@ -4,8 +4,11 @@ A square wave of 15 Hz and 0.3·τ_C is added to the feed-forward of each joint 
 at rest: too small to move the joint, it keeps the gearbox vibrating, which lowers the
 torque the operator needs to start a motion, and so the torque the momentum observer
 cannot see. It is switched off on a joint as soon as that joint moves, and back on
-after the joint has rested for a while. Its torque must be removed from the observer's
-input, and the friction compensation's dead-band is widened while it is on.
+after the joint has rested for a while. While every joint rests it parks (off on every
+joint until one moves) as soon as a joint creeps under it, or after a longer rest: on
+a load the model does not know, "too small to move the joint" is not true. Its torque
+must be removed from the observer's input, and the friction compensation's dead-band
+is widened while it is on.
 """
 
 from __future__ import annotations
@@ -35,25 +38,31 @@ class DitherParameters:
             ``rest_velocity``, the one definition of "at rest".
         rest_time: Time below ``moving_velocity`` before the dither comes back [s].
         park_time: Once *every* joint has rested this long, nobody is guiding the arm: the
-            dither stops until a joint moves again [s]; None dithers at rest for ever (the
-            thesis). A joint counts as resting here when its velocity or its velocity
-            low-passed over one dither period (:attr:`Dither.slow_velocity`) is below
-            ``moving_velocity``: a joint being guided moves by both, while the slips the
-            dither causes, its twitch and the tail of a stop move by one only. A dithered
-            joint under a static load the model does not know (a mass error, a drive gain)
-            creeps, so an arm left alone would not stay where it was put: 0.6–0.8 mrad/s
-            on the guiding benchmark's LuGre plants without a start-up calibration, up to
-            2 mrad/s where the active law reads the friction credited to the creep as a
-            push, against a released arm's budget of 1 mrad. 0.5 s (2 s before) ends such
-            creeps within it; the price is a start after a longer pause, whose first joint
-            breaks away without the dither.
+            dither stops until a joint moves again [s]; None: only a creep parks it. A joint
+            counts as resting here when its velocity or its velocity low-passed over one
+            dither period (:attr:`Dither.slow_velocity`) is below ``moving_velocity``: a
+            joint being guided moves by both, while the slips the dither causes, its twitch
+            and the tail of a stop move by one only.
+        creep: While every joint rests, a dithered joint whose position (low-passed over one
+            dither period from where the joint came to rest, :attr:`Dither.slow_position`)
+            moves this far from where its dither found it parks the dither at once [rad];
+            None: only ``park_time`` parks it. A dithered joint under a static load the
+            model does not know (a mass error, a drive gain) creeps, 0.6–2 mrad/s on the
+            guiding benchmark's LuGre plants without a start-up calibration, against a
+            released arm's budget of 1 mrad: the dither, meant to show a push without
+            moving the arm, is then moving it. 0.2 mrad is a fifth of that budget and 20×
+            what the twitch leaves in that position on the benchmark's dry plants. Parking
+            on the creep itself, instead of after a time short enough for the fastest
+            creep (0.5 s in the previous release), keeps the dither for the arms that do
+            not creep, whose next start it lightens.
     """
 
     frequency: float = 15.0
     amplitude: float = 0.3
     moving_velocity: float = 0.01
     rest_time: float = 0.2
-    park_time: float | None = 0.5
+    park_time: float | None = 2.0
+    creep: float | None = 2e-4
 
     def __post_init__(self) -> None:
         real("frequency", self.frequency, minimum=0.0, strict=True, error=ParameterError)
@@ -64,6 +73,8 @@ class DitherParameters:
         real("rest_time", self.rest_time, minimum=0.0, error=ParameterError)
         if self.park_time is not None:
             real("park_time", self.park_time, minimum=0.0, strict=True, error=ParameterError)
+        if self.creep is not None:
+            real("creep", self.creep, minimum=0.0, strict=True, error=ParameterError)
 
 
 class Dither:
@@ -96,15 +107,19 @@ class Dither:
         self.active = np.ones(n, dtype=bool)
         self._quiet_since: float | None = None  # when every joint was at rest [s]
         self._slow = np.zeros(n)  # the velocity low-passed over a dither period [rad/s]
+        self._position = np.full(n, np.nan)  # the position low-passed so [rad], NaN: none yet
+        self._anchor = np.full(n, np.nan)  # where the dither found each joint [rad], NaN: off
         self._now = 0.0
 
     @property
     def parked(self) -> bool:
-        """Whether every joint has rested for ``park_time``: the dither is off."""
-        park_time = self.parameters.park_time
-        if park_time is None or self._quiet_since is None:
+        """Whether every joint has rested for ``park_time``, or a joint crept: the dither is off."""
+        park_time, quiet_since = self.parameters.park_time, self._quiet_since
+        if quiet_since is None:
             return False
-        return bool(self._lasted(self._now - self._quiet_since, park_time))
+        if quiet_since == -math.inf:  # a creep (:meth:`decide`)
+            return True
+        return park_time is not None and bool(self._lasted(self._now - quiet_since, park_time))
 
     def _lasted(self, elapsed: FloatArray | float, duration: float) -> NDArray[np.bool_]:
         """Whether samples spanning ``elapsed`` [s] (each one period) cover ``duration`` [s].
@@ -152,8 +167,30 @@ class Dither:
         return self._slow
 
     @property
+    def slow_position(self) -> FloatArray:
+        """Each joint's position low-passed over one dither period [rad]; NaN before a sample.
+
+        Restarted from the reading when the joint comes to rest.
+
+        The array itself: a compiled step updates it in place.
+        """
+        return self._position
+
+    @property
+    def anchor(self) -> FloatArray:
+        """Where the dither found each joint while every joint rests [rad]; NaN: none.
+
+        The :attr:`slow_position` when the joint's dither came on (or when every joint
+        came to rest, if later). The array itself: a compiled step updates it in place.
+        """
+        return self._anchor
+
+    @property
     def quiet_since(self) -> float:
-        """When every joint came to rest [s since the first sample]; NaN: a joint moves."""
+        """When every joint came to rest [s since the first sample]; NaN: a joint moves.
+
+        −inf once a joint crept (``creep``): parked until a joint moves.
+        """
         return math.nan if self._quiet_since is None else self._quiet_since
 
     @quiet_since.setter
@@ -178,10 +215,13 @@ class Dither:
         p = self.parameters
         qd = np.asarray(qd, dtype=float)
         still = np.abs(qd) < p.moving_velocity
+        stopped = still & np.isnan(self._rest_since)  # came to rest in this sample
         # at rest since then (−inf: long enough already); NaN while moving
         self._rest_since = np.where(still, np.fmin(self._rest_since, now), np.nan)
         pole, finite = self.slow_pole, np.isfinite(qd)  # a NaN sample moves, filters nothing
         self._slow = np.where(finite, pole * self._slow + (1.0 - pole) * qd, self._slow)
+        if q is not None:
+            self._filter_position(np.asarray(q, dtype=float), stopped)
         # a joint guided moves now *and* over the last dither period (slips, twitches, the
         # tail of a stop are not guiding)
         quiet = still | (finite & (np.abs(self._slow) < p.moving_velocity))
@@ -190,5 +230,34 @@ class Dither:
         elif self._quiet_since is None:
             self._quiet_since = now
         rested = self._lasted(now - self._rest_since, p.rest_time)
+        self._watch_creep(rested)
         self.active = rested if not self.parked else np.zeros_like(rested)
         return np.where(self.active, wave * p.amplitude * self.friction.coulomb_level(q), 0.0)
+
+    def _filter_position(self, q: FloatArray, stopped: NDArray[np.bool_]) -> None:
+        """Low-pass the joint readings over one dither period (a NaN reading leaves it).
+
+        A joint that has just stopped starts from its reading: the filter's lag behind
+        the motion before (up to speed × 67 ms) is not a creep.
+        """
+        pole, position = self.slow_pole, self._position
+        restart = stopped | np.isnan(position)
+        filtered = np.where(restart, q, pole * position + (1.0 - pole) * q)
+        self._position = np.where(np.isfinite(q), filtered, position)
+
+    def _watch_creep(self, rested: NDArray[np.bool_]) -> None:
+        """Anchor the rested joints while every joint rests; park once one moved ``creep``."""
+        if self._quiet_since is None:  # a joint moves: no anchors
+            self._anchor = np.full_like(self._anchor, np.nan)
+            return
+        anchored = np.isfinite(self._anchor)
+        # a joint that moved away from its anchor (checked before this sample's new ones)
+        crept = anchored & (np.abs(self._position - self._anchor) > self._creep_limit)
+        self._anchor = np.where(rested, np.where(anchored, self._anchor, self._position), np.nan)
+        if np.any(crept):
+            self._quiet_since = -math.inf
+
+    @property
+    def _creep_limit(self) -> float:
+        """``creep`` [rad], inf without one."""
+        return math.inf if self.parameters.creep is None else self.parameters.creep

@@ -175,9 +175,12 @@ class PassiveFeedForward:
             math.inf if park_time is None else park_time, dt, law.dead_band, law.fraction,
             law.full_velocity, self.compensation.pole,
             math.nan if gravity_uncertainty is None else gravity_uncertainty,
-            self.dither.slow_pole if self.dither else 0.0])  # fmt: skip
+            self.dither.slow_pole if self.dither else 0.0,
+            math.inf if not dither_settings or dither_settings.creep is None
+            else dither_settings.creep])  # fmt: skip
         self._no_rest = np.full(n, np.nan)  # the dither's state when there is no dither
         self._no_slow = np.zeros(n)
+        self._no_position = np.full(n, np.nan)
         self._no_reference = np.zeros(n)
         self._no_active = np.zeros(n, dtype=bool)
 
@@ -221,14 +224,16 @@ class PassiveFeedForward:
         compensation, errors = self.compensation, (self.friction_error, reference)
         level = compensation.friction.coulomb_level(q)
         if dither is None:
-            _feed_forward_step(velocity, level, gravity, *errors, self._no_rest, self._no_slow,
+            _feed_forward_step(q, velocity, level, gravity, *errors, self._no_rest,
+                               self._no_slow, self._no_position, self._no_position,
                                self._no_active, compensation.filtered, parts, False, 0.0,
                                math.nan, 0.0, self._scalars)  # fmt: skip
         else:
             amplitude = wave * dither.parameters.amplitude
-            dither.quiet_since = _feed_forward_step(velocity, level, gravity, *errors,
-                dither.rest_since, dither.slow_velocity, dither.active, compensation.filtered,
-                parts, True, now, dither.quiet_since, amplitude, self._scalars)  # fmt: skip
+            dither.quiet_since = _feed_forward_step(q, velocity, level, gravity, *errors,
+                dither.rest_since, dither.slow_velocity, dither.slow_position, dither.anchor,
+                dither.active, compensation.filtered, parts, True, now, dither.quiet_since,
+                amplitude, self._scalars)  # fmt: skip
         torques = FeedForwardTorques(gravity, parts[0], parts[1], self._measured(parts[1]))
         torques.__dict__["total"] = parts[2]  # the cached sum, computed by the kernel
         return torques
@@ -270,24 +275,29 @@ class PassiveFeedForward:
 #: Scalars of :func:`_feed_forward_step`, in order (``park_time`` inf: never parks).
 FEED_FORWARD_SCALARS = ("moving_velocity", "rest_time", "park_time", "dt", "dead_band",
                         "fraction", "full_velocity", "pole", "gravity_uncertainty",
-                        "slow_pole")  # fmt: skip
+                        "slow_pole", "creep")  # fmt: skip
 
 
 @kernel
-def _feed_forward_step(qd, level, gravity, friction_error, reference, rest_since, slow,
-                       active, filtered, parts, dithering, now, quiet_since, amplitude,
-                       scalars):  # fmt: skip
+def _feed_forward_step(q, qd, level, gravity, friction_error, reference, rest_since, slow,
+                       position, anchor, active, filtered, parts, dithering, now, quiet_since,
+                       amplitude, scalars):  # fmt: skip
     """One period of :class:`PassiveFeedForward`, in place; returns the new ``quiet_since``.
 
     The same decisions and arithmetic, in the same order, as the NumPy reference
     (:meth:`Dither.decide`, the dead-band widened on the dithered joints, then
     :meth:`CoulombCompensation.step`): rest times (``np.fmin``, NaN while moving), the
     velocity low-passed over a dither period (``slow``, a NaN or infinite sample leaves it
-    and moves), the park (a joint rests if either velocity is below ``moving_velocity``;
-    ``quiet_since`` NaN: not every joint rests; ``park_time`` inf: never), the
-    rested joints and their dither ``amplitude · τ_C(q)`` [Nm] (``amplitude`` signed by
-    the wave), each "lasted" test ``elapsed + dt >= duration − dt / 2``; the compensation
-    ramp ends at ``max(q̇₁, 2 q̇₀)``, the level ``ε τ_C`` capped by
+    and moves) and the position so (``position``, NaN: none yet; a NaN reading leaves it;
+    restarted from the reading where a joint comes to rest),
+    the park (a joint rests if either velocity is below ``moving_velocity``;
+    ``quiet_since`` NaN: not every joint rests; ``park_time`` inf: never), the creep
+    (``anchor`` each rested joint's position while every joint rests, NaN otherwise; an
+    anchored joint farther than ``creep`` from it sets ``quiet_since`` to −inf: parked;
+    ``creep`` inf: never), the rested joints and their dither ``amplitude · τ_C(q)`` [Nm]
+    (``amplitude`` signed by the wave), each "lasted" test
+    ``elapsed + dt >= duration − dt / 2``; the compensation ramp ends at
+    ``max(q̇₁, 2 q̇₀)``, the level ``ε τ_C`` capped by
     :func:`~leadthrough.friction.compensation.compensation_ceiling` (its ``max(·, 0)`` as
     written there; ``gravity_uncertainty`` NaN: no cap), then the low-pass filter.
     ``parts`` gets the rows
@@ -296,30 +306,51 @@ def _feed_forward_step(qd, level, gravity, friction_error, reference, rest_since
     """
     moving_velocity, rest_time, park_time, dt = scalars[0], scalars[1], scalars[2], scalars[3]
     dead_band, fraction, full_velocity, pole = scalars[4], scalars[5], scalars[6], scalars[7]
-    gravity_uncertainty, slow_pole = scalars[8], scalars[9]
+    gravity_uncertainty, slow_pole, creep = scalars[8], scalars[9], scalars[10]
     capped = gravity_uncertainty == gravity_uncertainty  # not NaN
     n = qd.shape[0]
     if dithering:
         every_joint_rests = True
         for i in range(n):
             still = abs(qd[i]) < moving_velocity
+            since = rest_since[i]
+            stopped = still and since != since  # came to rest in this sample
             if still:
-                since = rest_since[i]
                 rest_since[i] = now if since != since or now < since else since  # np.fmin
             else:
                 rest_since[i] = math.nan
             finite = abs(qd[i]) < math.inf  # NaN compares False
             if finite:
                 slow[i] = slow_pole * slow[i] + (1.0 - slow_pole) * qd[i]
+            if abs(q[i]) < math.inf:
+                old = position[i]
+                restart = stopped or old != old
+                position[i] = q[i] if restart else slow_pole * old + (1.0 - slow_pole) * q[i]
             if not (still or (finite and abs(slow[i]) < moving_velocity)):
                 every_joint_rests = False
         if not every_joint_rests:
             quiet_since = math.nan
         elif quiet_since != quiet_since:
             quiet_since = now
-        parked = (now - quiet_since) + dt >= park_time - 0.5 * dt  # False for NaN and inf
+        crept = False
         for i in range(n):
-            active[i] = (now - rest_since[i]) + dt >= rest_time - 0.5 * dt and not parked
+            rested = (now - rest_since[i]) + dt >= rest_time - 0.5 * dt
+            active[i] = rested
+            if quiet_since != quiet_since:
+                anchor[i] = math.nan
+                continue
+            if abs(position[i] - anchor[i]) > creep:  # False for a NaN anchor
+                crept = True
+            if not rested:
+                anchor[i] = math.nan
+            elif anchor[i] != anchor[i]:
+                anchor[i] = position[i]
+        if crept:
+            quiet_since = -math.inf
+        # False for a NaN quiet_since; park_time inf: only a creep (quiet_since −inf) parks
+        parked = (now - quiet_since) + dt >= park_time - 0.5 * dt
+        for i in range(n):
+            active[i] = active[i] and not parked
     for i in range(n):
         on = dithering and active[i]
         dither = amplitude * level[i] if on else 0.0
