@@ -170,9 +170,8 @@ class Dither:
     def slow_position(self) -> FloatArray:
         """Each joint's position low-passed over one dither period [rad]; NaN before a sample.
 
-        Restarted from the reading when the joint comes to rest.
-
-        The array itself: a compiled step updates it in place.
+        Restarted from the reading when the joint comes to rest. The array itself: a
+        compiled step updates it in place.
         """
         return self._position
 
@@ -205,7 +204,8 @@ class Dither:
 
         Args:
             qd: Joint velocities [rad/s].
-            q: Joint readings [rad] (for position-dependent Coulomb levels).
+            q: Joint readings [rad] (position-dependent Coulomb levels, and the creep:
+                without them no creep parks the dither).
             t: Time of the sample [s], any origin (a robot's Unix clock included).
         """
         return self.decide(qd, q, *self.clock(t))
