@@ -210,6 +210,27 @@ def test_parameters_load_from_toml(tmp_path):
         LeadThroughParameters.from_toml(path)
 
 
+def test_toml_false_sets_what_may_be_none(tmp_path):
+    """TOML has no null: ``false`` switches off a table or a setting that may be None.
+
+    Before, a dither that never parks (``park_time``, ``creep`` None) could not be written
+    in TOML at all; ``false`` on a number that must be set stays an error, and an error
+    inside a table names the file and the table.
+    """
+    path = tmp_path / "lead.toml"
+    path.write_text("unwind_time = false\ntool_force = false\n[dither]\npark_time = false\n"
+                    "creep = false\n")  # fmt: skip
+    parameters = LeadThroughParameters.from_toml(path)
+    assert parameters.dither.park_time is None and parameters.dither.creep is None
+    assert parameters.unwind_time is None and parameters.tool_force is None
+    path.write_text("inertia_scale = false\n")
+    with pytest.raises(lt.ParameterError, match="inertia_scale: expected a number"):
+        LeadThroughParameters.from_toml(path)
+    path.write_text("[dither]\ncreep = -1.0\n")
+    with pytest.raises(lt.ParameterError, match=r"lead\.toml: dither: creep: must be > 0"):
+        LeadThroughParameters.from_toml(path)
+
+
 @pytest.mark.parametrize("kind", ["plane", "box"])
 def test_virtual_constraint_holds_the_tool_against_a_pull(yumi, friction, kind):
     """A hand pulls the tool up and sideways: a plane (or a flat box) keeps it low, not stuck."""

@@ -288,14 +288,17 @@ class LeadThroughParameters:
 _NESTED = {"compensation": CoulombCompensationParameters, "dither": DitherParameters,
            "observer": ObserverParameters, "safety": SafetyParameters,
            "calibration": CalibrationParameters, "tool_force": ToolForceParameters}  # fmt: skip
-#: Nested tables that ``false`` switches off.
-_OPTIONAL = ("dither", "calibration", "tool_force")
 
 
 def from_dict(kind: type, data: dict[str, Any], where: str) -> Any:
-    """Build the dataclass ``kind`` from ``data``, nested tables included."""
-    known = {item.name for item in dataclasses.fields(kind)}
-    unknown = sorted(set(data) - known)
+    """Build the dataclass ``kind`` from ``data``, nested tables included.
+
+    TOML has no null: ``false`` sets a field that may be None to None (a table switched
+    off, ``dither = false``, or a setting that is off, ``[dither] creep = false``). Bad
+    values name the file and the field.
+    """
+    fields = {item.name: item for item in dataclasses.fields(kind)}
+    unknown = sorted(set(data) - set(fields))
     if unknown:
         raise ParameterError(f"{where}: {unknown[0]}", "unknown parameter")
     values = {}
@@ -303,10 +306,19 @@ def from_dict(kind: type, data: dict[str, Any], where: str) -> Any:
         nested = _NESTED.get(name) if kind is LeadThroughParameters else None
         if nested is not None and isinstance(value, dict):
             value = from_dict(nested, value, f"{where}: {name}")
-        if name in _OPTIONAL and value is False:
+        if value is False and _may_be_none(fields[name]):
             value = None
         values[name] = value
     try:
         return kind(**values)
     except TypeError as error:
         raise ParameterError(where, str(error)) from None
+    except ParameterError as error:
+        if error.parameter.startswith(where):
+            raise
+        raise ParameterError(f"{where}: {error.parameter}", error.reason) from None
+
+
+def _may_be_none(item: dataclasses.Field[Any]) -> bool:
+    """Whether a dataclass field is annotated ``… | None`` (annotations are strings here)."""
+    return "None" in str(item.type).replace(" ", "").split("|")
