@@ -21,11 +21,13 @@ Usage:
         [--uncalibrated]              (both modes without the start-up calibration)
         [--plants FIELD=VALUE ...]    (another family: twin.plants.PlantRanges fields, e.g.
                                        position_amplitude=0.25 friction_scale=0.7,1.3)
+        [--dt 0.001]                  (another control rate: plants and controllers, 1 kHz)
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import importlib
 import json
 import sys
@@ -39,11 +41,13 @@ from leadthrough.experiments.guiding import (
     GOALS,
     HANDS,
     cases,
+    default_factory,
     evaluate,
     uncalibrated_factory,
 )
 from leadthrough.model import robots
 from leadthrough.twin.plants import PlantRanges
+from leadthrough.twin.simulator import TwinConfig, TwinError
 
 HEADER = (f"{'case':<30}{'effort a/p':>11}{'vib a/p':>9}{'speed p|a':>12}"
           f"{'resid p|a N':>13}{'stop p|a s':>11}{'drift p|a mrad':>15}{'obs rms':>8}{'cov':>6}"
@@ -165,8 +169,16 @@ def main(argv: list[str] | None = None) -> None:
         help="module:function building the active controller "
         "from (robot, mode); default lt.LeadThrough(robot, mode=mode, dt=0.004, calibrate=True)",
     )
+    parser.add_argument(
+        "--dt",
+        type=float,
+        default=0.004,
+        help="control period [s] of the plants and both default controllers (default 0.004, "
+        "250 Hz; 0.001 for a 1 kHz arm; the delay stays 1-2 periods)",
+    )
     args = parser.parse_args(argv)
-    factory = passive_factory = uncalibrated_factory if args.uncalibrated else None
+    built = uncalibrated_factory if args.uncalibrated else default_factory
+    factory = passive_factory = functools.partial(built, dt=args.dt)
     if args.factory:
         module, _, name = args.factory.partition(":")
         factory = getattr(importlib.import_module(module), name)
@@ -178,6 +190,10 @@ def main(argv: list[str] | None = None) -> None:
         ranges = plant_ranges(args.plants)
     except ValueError as error:
         parser.error(str(error))
+    try:
+        TwinConfig(control_dt=args.dt)  # a period the twin can run
+    except (ParameterError, TwinError) as error:
+        parser.error(f"--dt: {error}")
     total, start = len(cases(args.cases, seeds, hands, ranges)), time.perf_counter()
 
     def report(name: str, figures: dict[str, float]) -> None:

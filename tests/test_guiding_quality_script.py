@@ -71,3 +71,12 @@ def test_a_wider_plant_family_reaches_every_case_and_a_bad_setting_is_a_one_line
         with pytest.raises(SystemExit):
             guiding_quality.main(["--plants", setting])
         assert says in capsys.readouterr().err.strip().splitlines()[-1]
+
+
+def test_a_control_period_the_twin_cannot_run_is_a_one_line_error(capsys):
+    """``--dt`` sets the plants' and controllers' period; one the twin cannot run is refused."""
+    for dt, says in (("0.0013", "--dt: control_dt 0.0013 is not a multiple of physics_dt"),
+                     ("-0.004", "--dt: control_dt: must be >= 0.0005, got -0.004")):  # fmt: skip
+        with pytest.raises(SystemExit):
+            guiding_quality.main(["--dt", dt, "--cases", "quick"])
+        assert capsys.readouterr().err.strip().splitlines()[-1].endswith(says)

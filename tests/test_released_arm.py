@@ -13,6 +13,7 @@ exceeded the friction. Two things stop it, each tested here against the case it 
 """
 
 import dataclasses
+import functools
 
 import numpy as np
 import pytest
@@ -30,7 +31,7 @@ from leadthrough.control.admittance import AdmittanceState
 from leadthrough.control.calibration import Calibration
 from leadthrough.control.feedforward import PassiveFeedForward
 from leadthrough.control.lead_through import LeadThrough
-from leadthrough.experiments.guiding import Case, run_case
+from leadthrough.experiments.guiding import Case, default_factory, run_case
 from leadthrough.friction.compensation import compensation_ceiling
 from leadthrough.twin.plants import WIDER_RANGES, PlantRanges, sample_plant
 from leadthrough.twin.runner import simulate
@@ -471,3 +472,15 @@ def test_the_dither_parks_on_a_creep_within_the_drift_budget(case, mode):
 def test_parked_after_two_seconds_alone_the_dithered_creep_leaves_the_drift_budget(case):
     """Parked only after 2 s of rest, not on the creep: the same creeps run past 1 mrad."""
     assert run_case(case, "active", _uncalibrated(creep=None)).drift > 1e-3
+
+
+def test_at_a_kilohertz_the_released_active_arm_stops_as_at_250_hz():
+    """A 1 kHz arm: the twin runs at the controller's period, the released arm still stops.
+
+    Nothing in the defaults is counted in periods of 4 ms (filters, times and noise
+    intensities are in seconds), so a controller built with ``dt=0.001`` on a plant
+    sampled at 1 kHz keeps the release goals (the control loop refuses a controller whose
+    period differs from the twin's, so the run itself shows the twin ran at 1 ms).
+    """
+    result = run_case(COASTING, "active", functools.partial(default_factory, dt=0.001))
+    assert result.stop_time <= 0.5 and result.drift < 1e-3

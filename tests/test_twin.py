@@ -271,7 +271,9 @@ def test_mock_robot_integrates_exactly():
 
 
 def test_twin_config_rejects_bad_timing():
-    """A control period that is not a multiple of the physics step is refused."""
+    """A control period that is not a multiple of the physics step, or below it, is refused."""
     with pytest.raises(TwinError, match="multiple"):
         TwinConfig(control_dt=0.0041)
+    with pytest.raises(lt.ParameterError, match=r"control_dt: must be >= 0\.0005"):
+        TwinConfig(control_dt=-0.004)  # named as the twin's, not a robot description's
     dataclasses.replace(TwinConfig(), control_dt=0.001)

@@ -20,7 +20,7 @@ simulated robot before the grab (an oracle may then read the true operator torqu
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -185,14 +185,14 @@ def _robot_or_yumi(robot: RobotDescription | None) -> RobotDescription:
     return robot
 
 
-def default_factory(robot: RobotDescription, mode: str) -> LeadThrough:
+def default_factory(robot: RobotDescription, mode: str, dt: float = 0.004) -> LeadThrough:
     """What a user writes: ``LeadThrough(robot, mode=mode, dt=0.004, calibrate=True)``."""
-    return LeadThrough(robot, mode=mode, dt=0.004, calibrate=True)  # type: ignore[arg-type]
+    return LeadThrough(robot, mode=mode, dt=dt, calibrate=True)  # type: ignore[arg-type]
 
 
-def uncalibrated_factory(robot: RobotDescription, mode: str) -> LeadThrough:
+def uncalibrated_factory(robot: RobotDescription, mode: str, dt: float = 0.004) -> LeadThrough:
     """The constructor's default: ``LeadThrough(robot, mode=mode, dt=0.004)``, no calibration."""
-    return LeadThrough(robot, mode=mode, dt=0.004)  # type: ignore[arg-type]
+    return LeadThrough(robot, mode=mode, dt=dt)  # type: ignore[arg-type]
 
 
 class _Recorder:
@@ -227,13 +227,15 @@ def _run(
     """One run from the grab on (t = 0 at the grab) and what the controller estimated.
 
     The hand grabs the flange where it is once the calibration is over (the calibration
-    may have moved the arm a little): its path starts there.
+    may have moved the arm a little): its path starts there. The plant runs at the
+    controller's period (``dt``, 4 ms when it has none); its delay is in periods.
     """
     plant = sample_plant(robot, case.seed, case.physics, case.ranges)
     stiffness, damping = HANDS[case.hand]
     recorder = _Recorder(factory(robot, mode))
     grab = float(getattr(recorder.controller, "calibration_time", CalibrationParameters().duration))
-    twin = DigitalTwin(robot, plant.config)
+    config = replace(plant.config, control_dt=recorder.dt or plant.config.control_dt)
+    twin = DigitalTwin(robot, config)
     observe_truth = getattr(recorder.controller, "observe_truth", None)
     if observe_truth is not None:  # an oracle (diagnosis): reads the twin's truth
         observe_truth(twin)

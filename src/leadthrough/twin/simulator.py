@@ -21,7 +21,7 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike
 
-from leadthrough.errors import InputShapeError, LeadthroughError
+from leadthrough.errors import InputShapeError, LeadthroughError, ParameterError
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.runtime.interface import JointState, RobotInterface
 from leadthrough.twin.dry_friction import DryFriction, DryFrictionParameters
@@ -77,12 +77,12 @@ class TwinConfig:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        real("physics_dt", self.physics_dt, minimum=0.0, strict=True)
-        real("control_dt", self.control_dt, minimum=self.physics_dt)
+        real("physics_dt", self.physics_dt, minimum=0.0, strict=True, error=ParameterError)
+        real("control_dt", self.control_dt, minimum=self.physics_dt, error=ParameterError)
         ratio = self.control_dt / self.physics_dt
         if abs(ratio - round(ratio)) > 1e-9:
             raise TwinError(f"control_dt {self.control_dt} is not a multiple of physics_dt")
-        real("delay_periods", self.delay_periods, minimum=0.0)
+        real("delay_periods", self.delay_periods, minimum=0.0, error=ParameterError)
         expected = {"lugre": TwinFrictionParameters, "dry": DryFrictionParameters}
         if self.friction_physics not in expected:
             raise TwinError(
