@@ -186,12 +186,18 @@ def _robot_or_yumi(robot: RobotDescription | None) -> RobotDescription:
 
 
 def default_factory(robot: RobotDescription, mode: str, dt: float = 0.004) -> LeadThrough:
-    """What a user writes: ``LeadThrough(robot, mode=mode, dt=0.004, calibrate=True)``."""
+    """What a user writes: ``LeadThrough(robot, mode=mode, dt=0.004, calibrate=True)``.
+
+    ``dt``: the control period [s] (the plant runs at it, :func:`run_case`).
+    """
     return LeadThrough(robot, mode=mode, dt=dt, calibrate=True)  # type: ignore[arg-type]
 
 
 def uncalibrated_factory(robot: RobotDescription, mode: str, dt: float = 0.004) -> LeadThrough:
-    """The constructor's default: ``LeadThrough(robot, mode=mode, dt=0.004)``, no calibration."""
+    """The constructor's default: ``LeadThrough(robot, mode=mode, dt=0.004)``, no calibration.
+
+    ``dt``: the control period [s] (the plant runs at it, :func:`run_case`).
+    """
     return LeadThrough(robot, mode=mode, dt=dt)  # type: ignore[arg-type]
 
 
