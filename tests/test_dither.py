@@ -13,7 +13,7 @@ from leadthrough.friction.model import FrictionModel
 N = 7
 DT = 0.004
 #: The thesis' dither, never parked: the wave and each joint's rest (the park: below).
-NEVER_PARKED = DitherParameters(park_time=None, creep=None)
+NEVER_PARKED = DitherParameters.never_parked()
 
 
 @pytest.fixture(scope="module")
@@ -38,7 +38,7 @@ def run_still(dither: Dither, steps: int, q=None) -> np.ndarray:
 @pytest.mark.parametrize("frequency", [15.0, 10.0, 7.0, 25.0])
 def test_square_wave_edges_at_the_right_times(friction, frequency):
     """Over 1 s at rest, each joint follows the ±1 square wave at `frequency` (2f − 1 edges)."""
-    dither = Dither(friction, DT, DitherParameters(frequency=frequency, park_time=None, creep=None))
+    dither = Dither(friction, DT, DitherParameters.never_parked(frequency=frequency))
     steps = round(1.0 / DT)
     torque = run_still(dither, steps)
     wave = torque / (0.3 * friction.coulomb)
@@ -160,7 +160,7 @@ def test_brief_rests_do_not_restart_the_dither(friction):
 )
 def test_rest_time_counted_in_whole_periods(friction, dt, rest_time):
     """The dither returns after exactly round(rest_time / dt) still samples."""
-    dither = Dither(friction, dt, DitherParameters(rest_time=rest_time, park_time=None, creep=None))
+    dither = Dither(friction, dt, DitherParameters.never_parked(rest_time=rest_time))
     moving = np.full(N, 0.5)
     dither.step(moving)
     rest_steps = round(rest_time / dt)

@@ -329,7 +329,7 @@ def test_the_creep_limit_must_be_positive():
 
 def test_dither_without_park_time_never_parks(friction):
     """park_time and creep None: the thesis' dither, at rest for ever."""
-    dither = Dither(friction, DT, DitherParameters(park_time=None, creep=None))
+    dither = Dither(friction, DT, DitherParameters.never_parked())
     torques = [dither.step(np.zeros(N)) for _ in range(round(10.0 / DT))]
     assert not dither.parked and np.all(np.abs(torques[-1]) > 0.0)
 

@@ -76,7 +76,7 @@ def test_released_arm_stays_with_every_mass_off_by_5_percent(yumi, mass_scale):
 def test_parking_the_dither_keeps_a_wrong_model_still(yumi):
     """A dithered joint under an unmodelled load creeps: parked, it stays put."""
     config = TwinConfig(model_error=ModelError(mass_scale=0.95), seed=1)
-    always = LeadThroughParameters(dither=DitherParameters(park_time=None, creep=None))
+    always = LeadThroughParameters(dither=DitherParameters.never_parked())
     creeping = release_and_stay(yumi, None, config, always)
     parked = release_and_stay(yumi, None, config)
     assert parked.drift < creeping.drift / 3.0

@@ -76,6 +76,14 @@ class DitherParameters:
         if self.creep is not None:
             real("creep", self.creep, minimum=0.0, strict=True, error=ParameterError)
 
+    @classmethod
+    def never_parked(cls, **changes: float) -> DitherParameters:
+        """The thesis' dither (§5.3): on at rest for ever, neither a time nor a creep parks it.
+
+        ``changes``: other fields, e.g. ``frequency=30.0``.
+        """
+        return cls(park_time=None, creep=None, **changes)
+
 
 class Dither:
     """Square-wave dither on the joints at rest.

@@ -228,7 +228,7 @@ def breakaway_with_and_without_dither(
     runs, breakaway, delay = {}, {}, {}
     for key, setting in (
         ("no_dither", None),
-        ("dither", dither or DitherParameters(park_time=None, creep=None)),
+        ("dither", dither or DitherParameters.never_parked()),
     ):
         run = _run(robot, friction, operator, 4.0, joint, config, dither=setting)
         t, truth = run.simulation.t, run.simulation.tau_ext[:, joint]
@@ -278,8 +278,7 @@ def dither_frequency_sweep(
     noise, vibration, drift = [], [], []
     for frequency in frequencies:
         run = _run(robot, friction, Operator(), duration, 0, config,
-                   dither=DitherParameters(frequency=float(frequency), park_time=None,
-                                            creep=None))  # fmt: skip
+                   dither=DitherParameters.never_parked(frequency=float(frequency)))  # fmt: skip
         sim = run.simulation
         settled = sim.t > 0.5
         noise.append(float(np.sqrt(np.mean(sim.qd[settled] ** 2))))
