@@ -17,7 +17,13 @@ Per joint, from the logs where that joint moved:
 4. the noise σ is the standard deviation of the sliding residual (the thesis' "variance
    of the friction torque at high velocities");
 5. the sigmoid slope A and half-width B are fitted (SciPy ``least_squares``, robust loss)
-   to the slow samples with τ_C and c held.
+   to the slow samples with τ_C and c held;
+6. the level's relative error (``relative_error``): 3 std of τ_C plus the largest
+   deviation of the level measured along the travel, up and down strokes compared at the
+   same positions, the other joints still (:mod:`leadthrough.friction.along_travel`, free
+   of gravity error), from the fitted ``τ_C(q)``; where too little travel was passed both
+   ways so, 2 std of the sliding residual instead, which carries any rigid-body model
+   error too.
 
 Parameter standard deviations come from the least-squares covariance.
 """
@@ -32,6 +38,7 @@ import numpy as np
 
 from leadthrough.errors import LeadthroughError
 from leadthrough.filters import low_pass_signal, pole
+from leadthrough.friction.along_travel import level_along_travel, level_error
 from leadthrough.friction.model import FrictionModel, level_stays_positive, sigmoid
 from leadthrough.model.description import FloatArray
 from leadthrough.model.dynamics import Dynamics
@@ -76,6 +83,9 @@ class FitReport:
         parameter_std: Standard deviation of each fitted parameter, by name.
         position_fitted: Whether the position dependence was fitted.
         joints: Joints identified (0-based); the others keep NaN in the arrays.
+        level_error: Largest relative deviation of the Coulomb level measured along the
+            travel (up and down strokes at the same positions) from the fitted τ_C(q) [–];
+            NaN where too little travel was passed both ways.
     """
 
     residual_rms: FloatArray
@@ -83,19 +93,22 @@ class FitReport:
     parameter_std: dict[str, FloatArray]
     position_fitted: np.ndarray
     joints: tuple[int, ...]
+    level_error: FloatArray
 
     def not_identified(self) -> tuple[int, ...]:
         """Joints (0-based) not identified: their model values are the prior's."""
         return tuple(j for j in range(len(self.samples)) if j not in self.joints)
 
     def __str__(self) -> str:
-        lines = [f"{'joint':>5}{'samples':>9}{'RMS [Nm]':>10}{'±τ_C':>9}{'±c':>9}{'position':>10}"]
+        lines = [f"{'joint':>5}{'samples':>9}{'RMS [Nm]':>10}{'±τ_C':>9}{'±c':>9}{'position':>10}"
+                 f"{'level off along travel':>24}"]  # fmt: skip
         for j in self.joints:
-            std = self.parameter_std
+            std, off = self.parameter_std, self.level_error[j]
             lines.append(
                 f"{j + 1:>5}{self.samples[j]:>9.0f}{self.residual_rms[j]:>10.4f}"
                 f"{std['coulomb'][j]:>9.4f}{std['viscous'][j]:>9.4f}"
                 f"{'yes' if self.position_fitted[j] else 'no':>10}"
+                f"{f'{100 * off:.1f} %' if np.isfinite(off) else '–':>24}"
             )
         return "\n".join(lines)
 
@@ -256,6 +269,7 @@ def _empty_report(n: int, joints: tuple[int, ...]) -> FitReport:
         parameter_std={name: np.full(n, np.nan) for name in names},
         position_fitted=np.zeros(n, dtype=bool),
         joints=joints,
+        level_error=np.full(n, np.nan),
     )
 
 
@@ -292,23 +306,33 @@ def _fit_joint(
         report.parameter_std["position_linear"][j] = std[1] / coulomb
         report.parameter_std["position_quadratic"][j] = std[2] / coulomb
     report.parameter_std["coulomb"][j], report.parameter_std["viscous"][j] = std[0], std[-1]
-    # what is left unexplained: 3 std of the level plus the spread of the sliding residual
-    values["relative_error"][j] = np.clip((3.0 * std[0] + 2.0 * np.std(residual))
-                                          / max(coulomb, 1e-12),
+    others = np.delete(samples.q[mine], j, axis=1)[sliding]
+    centres, levels = level_along_travel(q[sliding], qd[sliding], tau[sliding], viscous, others)
+    off = level_error(levels, _level(values, j, (centres - mid) / half))
+    report.level_error[j] = off
+    # what the level may be off: 3 std of τ_C plus what it mis-states along the travel, or
+    # (too little travel passed both ways to measure that) the sliding residual's spread
+    unexplained = off * coulomb if np.isfinite(off) else 2.0 * np.std(residual)
+    values["relative_error"][j] = np.clip((3.0 * std[0] + unexplained) / max(coulomb, 1e-12),
                                           MIN_RELATIVE_ERROR, 0.5)  # fmt: skip
     report.residual_rms[j] = float(np.sqrt(np.mean(residual**2)))
     report.samples[j] = sliding.sum()
     report.position_fitted[j] = with_position
     slow = np.abs(qd) < 2.0 * settings.sliding_velocity
     if slow.sum() >= 20:
-        u_slow = np.clip(u[slow], -1.0, 1.0)  # as the model holds its ends (beyond the range)
-        level = coulomb * (1.0 + values["position_linear"][j] * u_slow
-                           + values["position_quadratic"][j] * u_slow**2)  # fmt: skip
+        level = _level(values, j, u[slow])
         start = (values["slope"][j], values["half_width"][j])
         params, std = _fit_sigmoids(qd[slow], level, values["viscous"][j],
                                     values["noise_std"][j], tau[slow], start)  # fmt: skip
         (values["slope"][j], values["half_width"][j]) = params
         report.parameter_std["slope"][j], report.parameter_std["half_width"][j] = std
+
+
+def _level(values: dict[str, FloatArray], j: int, u: FloatArray) -> FloatArray:
+    """Joint ``j``'s fitted level τ_C(q) [Nm] at ``u``, held at its ends as the model is."""
+    u = np.clip(u, -1.0, 1.0)
+    return values["coulomb"][j] * (1.0 + values["position_linear"][j] * u
+                                   + values["position_quadratic"][j] * u**2)  # fmt: skip
 
 
 def _fit_sliding(

@@ -79,8 +79,9 @@ class FrictionModel:
             position dependence describes, u = ±1 [rad], > 0; beyond the span the level
             holds its end value.
         relative_error: How far the true Coulomb level may be from this model's, as a
-            fraction [–] (0.2 unless an identification measured it); controllers size
-            their dead-zones with it.
+            fraction [–] (0.2 unless an identification measured it along the travel,
+            :mod:`leadthrough.friction.along_travel`); the active law's friction margin,
+            the compensation's ceiling and the observer's band are sized with it.
     """
 
     coulomb: FloatArray
