@@ -22,6 +22,8 @@ Usage:
         [--plants FIELD=VALUE ...]    (another family: twin.plants.PlantRanges fields, e.g.
                                        position_amplitude=0.25 friction_scale=0.7,1.3)
         [--dt 0.001]                  (another control rate: plants and controllers, 1 kHz)
+        [--identified]                (both modes with each plant's friction identified
+                                       first, as `leadthrough identify` would on the arm)
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ from leadthrough.experiments.guiding import (
     DIAGNOSTICS,
     GOALS,
     HANDS,
+    IdentifiedFirst,
     cases,
     default_factory,
     evaluate,
@@ -176,9 +179,19 @@ def main(argv: list[str] | None = None) -> None:
         help="control period [s] of the plants and both default controllers (default 0.004, "
         "250 Hz; 0.001 for a 1 kHz arm; the delay stays 1-2 periods)",
     )
+    parser.add_argument(
+        "--identified",
+        action="store_true",
+        help="identify each plant's friction first (the excitation of leadthrough identify, "
+        "about 10 s per plant) and build both modes with it instead of the nominal friction",
+    )
     args = parser.parse_args(argv)
     built = uncalibrated_factory if args.uncalibrated else default_factory
     factory = passive_factory = functools.partial(built, dt=args.dt)
+    if args.identified:
+        if args.factory:
+            parser.error("--identified builds the default controllers: drop --factory")
+        factory = passive_factory = IdentifiedFirst(built, args.dt)
     if args.factory:
         module, _, name = args.factory.partition(":")
         factory = getattr(importlib.import_module(module), name)

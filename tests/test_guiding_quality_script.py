@@ -80,3 +80,20 @@ def test_a_control_period_the_twin_cannot_run_is_a_one_line_error(capsys):
         with pytest.raises(SystemExit):
             guiding_quality.main(["--dt", dt, "--cases", "quick"])
         assert capsys.readouterr().err.strip().splitlines()[-1].endswith(says)
+
+
+def test_identified_first_builds_the_default_controllers_only(capsys):
+    """``--identified`` with a custom ``--factory`` is a one-line error.
+
+    It gives both default modes the plant's identified friction; a custom factory's
+    signature takes no friction.
+    """
+    with pytest.raises(SystemExit):
+        guiding_quality.main(["--identified", "--factory", "guiding_variants:true_torque",
+                              "--cases", "quick"])  # fmt: skip
+    assert (
+        capsys.readouterr()
+        .err.strip()
+        .splitlines()[-1]
+        .endswith("--identified builds the default controllers: drop --factory")
+    )

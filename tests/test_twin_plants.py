@@ -53,6 +53,35 @@ def test_dry_friction_level_stribeck_and_position():
     assert p.level([0.0], [0.1])[0] == pytest.approx(1.0, abs=1e-9)
     assert p.level([np.pi / 4], [0.0])[0] == pytest.approx(1.3 * 1.15)
     assert p.level([-np.pi / 4], [0.0])[0] == pytest.approx(1.3 * 0.85)
+    q = np.array([[0.3], [-1.1]])
+    np.testing.assert_allclose(p.coulomb_level(q), p.level(q, [[10.0], [10.0]]), rtol=1e-12)
+
+
+def test_a_plant_identified_first_guides_with_its_identified_friction(robot):
+    """IdentifiedFirst identifies the plant's friction once and builds both modes with it.
+
+    The excitation of `leadthrough identify` runs on a twin of the plant (dry, with its
+    drives' gains): each level comes out within 10 % of the plant's own, read through the
+    drive, at the middle of the stroke it saw.
+    """
+    from leadthrough.experiments.guiding import IdentifiedFirst
+
+    built = []
+
+    def factory(robot, mode, dt, friction):
+        built.append(friction)
+        return SimpleNamespace(dt=dt)
+
+    plant = sample_plant(robot, 3, "dry")
+    first = IdentifiedFirst(factory, dt=0.004)
+    first.controller(robot, "active", plant.config)
+    first.controller(robot, "passive", plant.config)
+    model = built[0]
+    assert built[1] is model and np.all(np.isfinite(model.relative_error))
+    # the drive reports applied / gain: a level read through it is the true one / gain
+    gain = np.asarray(plant.config.sensors.torque_gain or 1.0)
+    truth = plant.config.friction.coulomb_level(model.position_mid) / gain
+    np.testing.assert_allclose(model.coulomb, truth, rtol=0.1)
 
 
 def test_sampler_is_seeded_and_within_its_ranges(robot):
@@ -178,3 +207,12 @@ def test_a_plant_range_outside_what_it_allows_is_a_one_line_error(field, value, 
     with pytest.raises(ParameterError) as error:
         PlantRanges(**{field: value})
     assert says in str(error.value) and "\n" not in str(error.value)
+
+
+def test_the_friction_study_runs_on_a_dry_twin_and_knows_its_truth(robot):
+    """run_friction_study reads a dry twin's true level (its Stribeck-free τ_C(q))."""
+    from leadthrough.experiments.friction_study import run_friction_study
+
+    study = run_friction_study(robot, twin_config=TwinConfig(friction_physics="dry"), joints=[6])
+    coulomb_error, _ = study.errors()
+    assert abs(coulomb_error[6]) < 0.1

@@ -12,13 +12,17 @@ calibrate=True)`` with the nominal description and friction, the start-up calibr
 included; the hand grabs once it is over. ``controller_factory(robot, mode)`` replaces it
 (any object with ``step(state)`` or ``step(q, qd, tau_measured)``; ``calibration_time``,
 ``tau_ext_hat`` and ``std`` are read when present), to compare control laws on the same
-cases. For diagnosis only, a controller with ``observe_truth(twin)`` is handed the
+cases. :class:`IdentifiedFirst` builds them with each plant's friction identified first
+(the excitation of ``leadthrough identify`` run on the plant), as a user would on their
+own arm. For diagnosis only, a controller with ``observe_truth(twin)`` is handed the
 simulated robot before the grab (an oracle may then read the true operator torque, as
 ``benchmarks/guiding_variants.py`` does to measure what the estimate costs).
 """
 
 from __future__ import annotations
 
+import hashlib
+import pickle
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any, NamedTuple
@@ -27,15 +31,18 @@ import numpy as np
 
 from leadthrough.control.calibration import CalibrationParameters
 from leadthrough.control.lead_through import LeadThrough
+from leadthrough.friction.identification import identify_friction
+from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
+from leadthrough.runtime.excitation import friction_experiment
 from leadthrough.runtime.interface import JointState
 from leadthrough.runtime.loop import stepper
 from leadthrough.twin.operator import During, Hand
 from leadthrough.twin.paths import Circle, Line, Path
 from leadthrough.twin.plants import PlantRanges, sample_plant
 from leadthrough.twin.runner import SimulationResult, simulate
-from leadthrough.twin.simulator import DigitalTwin
+from leadthrough.twin.simulator import DigitalTwin, TwinConfig
 
 #: Hand impedances: (stiffness [N/m], damping [N s/m]). The benchmark's two span the
 #: issue's relaxed and stiff hands; "soft" and "firm" fill the 100–3000 N/m a person
@@ -59,8 +66,6 @@ HOLD = 2.0  # [s] of holding the end pose after the path
 REST = 10.0  # [s] after the release (plus 0.5 s to stop)
 VIBRATION_CUTOFF = 4.0  # [Hz]
 MOVING_SPEED = 0.01  # [rad/s] a joint slower than this has stopped
-
-ControllerFactory = Callable[[RobotDescription, str], Any]
 
 
 @dataclass(frozen=True)
@@ -185,20 +190,67 @@ def _robot_or_yumi(robot: RobotDescription | None) -> RobotDescription:
     return robot
 
 
-def default_factory(robot: RobotDescription, mode: str, dt: float = 0.004) -> LeadThrough:
+def default_factory(
+    robot: RobotDescription, mode: str, dt: float = 0.004, friction: FrictionModel | None = None
+) -> LeadThrough:
     """What a user writes: ``LeadThrough(robot, mode=mode, dt=0.004, calibrate=True)``.
 
-    ``dt``: the control period [s] (the plant runs at it, :func:`run_case`).
+    ``dt``: the control period [s] (the plant runs at it, :func:`run_case`); ``friction``:
+    an identified model (None: the description's).
     """
-    return LeadThrough(robot, mode=mode, dt=dt, calibrate=True)  # type: ignore[arg-type]
+    return LeadThrough(robot, mode=mode, dt=dt, friction=friction, calibrate=True)  # type: ignore[arg-type]
 
 
-def uncalibrated_factory(robot: RobotDescription, mode: str, dt: float = 0.004) -> LeadThrough:
+def uncalibrated_factory(
+    robot: RobotDescription, mode: str, dt: float = 0.004, friction: FrictionModel | None = None
+) -> LeadThrough:
     """The constructor's default: ``LeadThrough(robot, mode=mode, dt=0.004)``, no calibration.
 
-    ``dt``: the control period [s] (the plant runs at it, :func:`run_case`).
+    ``dt`` and ``friction`` as for :func:`default_factory`.
     """
-    return LeadThrough(robot, mode=mode, dt=dt)  # type: ignore[arg-type]
+    return LeadThrough(robot, mode=mode, dt=dt, friction=friction)  # type: ignore[arg-type]
+
+
+#: Friction identified per plant (:func:`identified_friction`), by robot and configuration.
+_IDENTIFIED: dict[str, FrictionModel] = {}
+
+
+def identified_friction(robot: RobotDescription, config: TwinConfig) -> FrictionModel:
+    """The friction ``leadthrough identify`` finds on the plant ``config`` (cached).
+
+    The project's excitation (one joint at a time, the others held) runs on a twin of that
+    plant, with its sensors and drives, and :func:`~leadthrough.friction.identification.
+    identify_friction` fits every joint, as a user would identify their own arm.
+    """
+    key = hashlib.sha1(pickle.dumps((robot.name, config))).hexdigest()
+    if key not in _IDENTIFIED:
+        dynamics = Dynamics(robot)
+        logs = friction_experiment(DigitalTwin(robot, config), dynamics, progress=False)
+        _IDENTIFIED[key], _ = identify_friction(logs, dynamics)
+    return _IDENTIFIED[key]
+
+
+@dataclass(frozen=True)
+class IdentifiedFirst:
+    """Builds each case's controller with the plant's friction identified first.
+
+    Attributes:
+        factory: ``factory(robot, mode, dt=..., friction=...)``, e.g. :func:`default_factory`.
+        dt: The control period [s] of the identification and of the controller.
+    """
+
+    factory: Callable[..., Any]
+    dt: float = 0.004
+
+    def controller(self, robot: RobotDescription, mode: str, plant: TwinConfig) -> Any:
+        """The controller of ``mode`` with the friction identified on ``plant``."""
+        friction = identified_friction(robot, replace(plant, control_dt=self.dt))
+        return self.factory(robot, mode, dt=self.dt, friction=friction)
+
+
+#: ``factory(robot, mode)`` → a controller; or an :class:`IdentifiedFirst`, which also gets
+#: the plant.
+ControllerFactory = Callable[[RobotDescription, str], Any] | IdentifiedFirst
 
 
 class _Recorder:
@@ -238,7 +290,10 @@ def _run(
     """
     plant = sample_plant(robot, case.seed, case.physics, case.ranges)
     stiffness, damping = HANDS[case.hand]
-    recorder = _Recorder(factory(robot, mode))
+    if isinstance(factory, IdentifiedFirst):
+        recorder = _Recorder(factory.controller(robot, mode, plant.config))
+    else:
+        recorder = _Recorder(factory(robot, mode))
     grab = float(getattr(recorder.controller, "calibration_time", CalibrationParameters().duration))
     config = replace(plant.config, control_dt=recorder.dt or plant.config.control_dt)
     twin = DigitalTwin(robot, config)

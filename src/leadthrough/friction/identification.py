@@ -289,9 +289,14 @@ def _fit_joint(
     if sliding.sum() < settings.minimum_samples:
         raise IdentificationError(f"joint {j + 1}: only {sliding.sum()} samples faster than "
                                   f"{settings.sliding_velocity:g} rad/s")  # fmt: skip
-    mid, half = 0.5 * (robot.q_min[j] + robot.q_max[j]), 0.5 * (robot.q_max[j] - robot.q_min[j])
-    u = (q - mid) / half
+    half = 0.5 * (robot.q_max[j] - robot.q_min[j])
     with_position = bool(np.ptp(q[sliding]) >= settings.position_span * 2.0 * half)
+    # the position dependence describes the stroke the sliding samples cover, and the model
+    # holds its end values beyond it: a quadratic is not extrapolated where no data were
+    span = q[sliding] if with_position else np.array([robot.q_min[j], robot.q_max[j]])
+    low, high = span.min(), span.max()
+    mid, half = 0.5 * (low + high), 0.5 * (high - low)
+    u = (q - mid) / half
     theta, std, residual = _fit_sliding(qd[sliding], u[sliding], tau[sliding], with_position)
     if with_position and not theta[0] > 3.0 * std[0]:  # no level the data resolve to scale by
         with_position = False

@@ -124,8 +124,16 @@ class DryFrictionParameters:
         """Dry-friction level [Nm] at joint angles ``q`` [rad] and velocities ``qd`` [rad/s]."""
         v = np.asarray(qd, dtype=float) / self.stribeck_velocity
         stribeck = self.coulomb + (self.static - self.coulomb) * np.exp(-(v * v))
+        return stribeck * self._position_factor(q)
+
+    def coulomb_level(self, q: ArrayLike) -> FloatArray:
+        """Sliding level, Stribeck's rise gone, at joint angles ``q`` [rad]: τ_C(q) [Nm]."""
+        return self.coulomb * self._position_factor(q)
+
+    def _position_factor(self, q: ArrayLike) -> FloatArray:
+        """1 + a sin(k q + φ) [–]."""
         angle = self.position_wavenumber * np.asarray(q, dtype=float) + self.position_phase
-        return stribeck * (1.0 + self.position_amplitude * np.sin(angle))
+        return 1.0 + self.position_amplitude * np.sin(angle)
 
 
 class DryFriction:
