@@ -35,6 +35,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/guiding_quality.py
 	$(BIN)/python benchmarks/guiding_quality.py --seeds 5-8
 	$(BIN)/python benchmarks/guiding_quality.py --seeds 9-12 --plants position_amplitude=0.25 friction_scale=0.7,1.3
+	$(BIN)/python benchmarks/guiding_quality.py --identified
 	$(BIN)/python benchmarks/margin_tradeoff.py --out build/margin_runs
 	$(BIN)/python benchmarks/calibration_accuracy.py
 	$(BIN)/python benchmarks/real_identification.py

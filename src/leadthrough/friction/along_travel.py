@@ -15,13 +15,13 @@ error a controller must allow for (``FrictionModel.relative_error``; the active 
 friction margin and the compensation's ceiling), not inflated by gravity error, which the
 start-up calibration and the learned bias handle.
 
-Only samples with the other joints
-within :data:`STILL` of where they mostly stood count: a run that moves one joint at a time
-(the UR10e's jointwise runs, the project's friction excitation) has them, a multi-joint
-excitation has too few, and the identification then falls back on the residual's spread.
+Only samples with the other joints within :data:`STILL` of where they mostly stood count:
+a run that moves one joint at a time (the UR10e's jointwise runs, the project's friction
+excitation) has them, a multi-joint excitation has too few, and the identification then
+falls back on the residual's spread.
 
-Measured on the real UR10e's jointwise runs (README, *Real robots' logs*): levels that
-move ±8 to ±21 % along 2–3 rad on joints 1–3 and within ±2 % on the wrists.
+Measured on the real UR10e's jointwise runs (README, *Real robots' logs*): levels that move
+±8 to ±22 % along 1.8–2.8 rad on joints 1–3 and within ±2 % on the wrists.
 """
 
 from __future__ import annotations
