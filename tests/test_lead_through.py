@@ -9,6 +9,7 @@ from leadthrough.control.dither import DitherParameters
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.control.parameters import LeadThroughParameters
 from leadthrough.experiments.lead_through import (
+    Recorder,
     end_stop,
     guided_run,
     release_and_stay,
@@ -251,3 +252,19 @@ def test_virtual_constraint_holds_the_tool_against_a_pull(yumi, friction, kind):
         rises[label] = np.max(sim.flange_position[:, 2] - start[2])
         assert sim.flange_position[-1, 1] - start[1] > 0.06  # it still slides along the plane
     assert rises["constrained"] < 0.6 * rises["free"]  # a 3000 N/m wall against a 60 N hand
+
+
+def test_the_recorder_keeps_each_periods_values_not_the_controllers_buffers(yumi):
+    """The figures plot each period's value, not the controller's latest.
+
+    The controller updates some arrays in place (its estimate): a log of references to them
+    drew one flat line, the last period's, over the whole run (Figs. 6.4–6.6 before).
+    """
+    recorder = Recorder(LeadThrough(yumi, "active"))
+    q, qd = yumi.home(), np.zeros(yumi.n_joints)
+    gravity = lt.Dynamics(yumi).gravity(q)
+    for k, push in enumerate((0.0, 0.0, 2.0, 2.0, 2.0)):
+        recorder.step(lt.JointState(0.004 * k, q, qd, gravity + push))
+    estimate = recorder.arrays()["estimate"]
+    assert np.ptp(estimate, axis=0).max() > 0.0
+    assert estimate[0] is not estimate[-1]

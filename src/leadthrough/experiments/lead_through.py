@@ -52,12 +52,12 @@ class Recorder:
         command = self.controller.step(state)
         parts = self.controller.last_feed_forward
         zeros = np.zeros_like(command)
-        self.log["gravity"].append(parts.gravity if parts else zeros)
-        self.log["friction"].append(parts.friction if parts else zeros)
-        self.log["dither"].append(parts.dither if parts else zeros)
-        self.log["estimate"].append(self.controller.tau_ext_hat)
-        self.log["operator"].append(self.controller.operator_torque)
-        self.log["command"].append(command)
+        values = (parts.gravity if parts else zeros, parts.friction if parts else zeros,
+                  parts.dither if parts else zeros, self.controller.tau_ext_hat,
+                  self.controller.operator_torque, command)  # fmt: skip
+        for name, value in zip(self.log, values, strict=True):
+            # copies: the controller updates some of its arrays in place every period
+            self.log[name].append(np.array(value, dtype=float))
         return command
 
     def drop_first(self, count: int) -> None:
