@@ -11,9 +11,11 @@ Per joint, from the logs where that joint moved:
 3. sliding samples (|q̇| ≥ ``sliding_velocity``) fix the Coulomb level, its position
    dependence and the viscous coefficient by *linear* least squares,
    ``τ_f = sign(q̇) τ_C (1 + k₁ u + k₂ u²) + c q̇`` with τ_C, c ≥ 0. The position terms
-   are fitted only where the runs cover enough of the range, and constrained so that the
-   level stays above ``MIN_LEVEL`` τ_C over the whole joint range (a quadratic fitted
-   to a single sweep of a ±2π joint would otherwise be extrapolated below zero);
+   are fitted only where the runs cover enough of the range; they describe the stroke
+   the sliding samples cover (``u`` = ±1 at its ends), the model holds its end values
+   beyond it (a quadratic fitted to 45 % of a range and extrapolated over the rest read
+   a level 2.2× too high, or below zero on a single sweep of a ±2π joint), and the level
+   is constrained to stay above ``MIN_LEVEL`` τ_C over the stroke, so everywhere;
 4. the noise σ is the standard deviation of the sliding residual (the thesis' "variance
    of the friction torque at high velocities");
 5. the sigmoid slope A and half-width B are fitted (SciPy ``least_squares``, robust loss)
@@ -22,8 +24,8 @@ Per joint, from the logs where that joint moved:
    deviation of the level measured along the travel, up and down strokes compared at the
    same positions, the other joints still (:mod:`leadthrough.friction.along_travel`, free
    of gravity error), from the fitted ``τ_C(q)``; where too little travel was passed both
-   ways so, 2 std of the sliding residual instead, which carries any rigid-body model
-   error too.
+   ways with the other joints still, 2 std of the sliding residual instead, which carries
+   any rigid-body model error too.
 
 Parameter standard deviations come from the least-squares covariance.
 """
@@ -45,8 +47,8 @@ from leadthrough.model.dynamics import Dynamics
 
 #: Smallest relative Coulomb error an identification claims (a model is never perfect).
 MIN_RELATIVE_ERROR = 0.03
-#: A fitted position-dependent Coulomb level stays above this fraction of its mid-range value
-#: over the whole joint range (no joint loses its friction at some position).
+#: A fitted position-dependent Coulomb level stays above this fraction of its value at the
+#: stroke's middle over the stroke, and so everywhere (no joint loses its friction).
 MIN_LEVEL = 0.1
 
 
@@ -348,9 +350,9 @@ def _fit_sliding(
     Friction dissipates, so the Coulomb level and the viscous coefficient are bounded
     below by 0 (where the rigid-body model is poor, a nominal URDF, an unconstrained fit
     returns a negative level). The position-dependent level must stay above
-    ``MIN_LEVEL`` of its mid-range value over the *whole* joint range, u ∈ [−1, 1], not
-    only over the stroke the samples cover: a quadratic fitted to a fraction of a ±2π
-    range would otherwise be extrapolated below zero.
+    ``MIN_LEVEL`` of its value at the stroke's middle over u ∈ [−1, 1], the stroke the
+    samples cover; the model holds its end values beyond it, so the level is positive at
+    every position.
     """
     from scipy import optimize  # at call time: keeps `import leadthrough` fast
 
