@@ -2,7 +2,8 @@
 
 Each case (plant of either friction physics × relaxed or stiff hand × path) is run with
 passive and active lead-through, built through the public API with the nominal model and
-friction (see :mod:`leadthrough.experiments.guiding`). Per case and as median / worst:
+friction, or with each plant's friction identified first (``--identified``; see
+:mod:`leadthrough.experiments.guiding`). Per case and as median / worst:
 
 - effort: RMS hand force while the path moves, active / passive (goal ≤ 0.5 / ≤ 0.65);
 - vibration: RMS tool velocity above 4 Hz, active / passive (goal ≤ 1.5 in every case);

@@ -52,10 +52,12 @@ class Recorder:
         command = self.controller.step(state)
         parts = self.controller.last_feed_forward
         zeros = np.zeros_like(command)
-        values = (parts.gravity if parts else zeros, parts.friction if parts else zeros,
-                  parts.dither if parts else zeros, self.controller.tau_ext_hat,
-                  self.controller.operator_torque, command)  # fmt: skip
-        for name, value in zip(self.log, values, strict=True):
+        values = {"gravity": parts.gravity if parts else zeros,
+                  "friction": parts.friction if parts else zeros,
+                  "dither": parts.dither if parts else zeros,
+                  "estimate": self.controller.tau_ext_hat,
+                  "operator": self.controller.operator_torque, "command": command}  # fmt: skip
+        for name, value in values.items():
             # copies: the controller updates some of its arrays in place every period
             self.log[name].append(np.array(value, dtype=float))
         return command
