@@ -6,9 +6,10 @@ from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.calibration import CalibrationParameters
 from leadthrough.control.dither import DitherParameters
 
-#: Before: 5 mrad at 0.05 rad/s, inside the plants' Stribeck range, and a level refused
-#: outside 1 / 1.75–1.75× the model's.
-SLOW = {"stroke": 0.005, "speed": 0.05, "max_friction_change": 0.75}
+#: Before: 5 mrad at 0.05 rad/s, inside the plants' Stribeck range, a level refused
+#: outside 1 / 1.75–1.75× the model's, and a level read known to ``friction_accuracy``
+#: everywhere, its pose included.
+SLOW = {"stroke": 0.005, "speed": 0.05, "max_friction_change": 0.75, "level_slope": None}
 
 
 def slow_calibration_motion(monkeypatch) -> None:
@@ -18,6 +19,15 @@ def slow_calibration_motion(monkeypatch) -> None:
     the public API exactly as it did when it was found.
     """
     _built_as(monkeypatch, CalibrationParameters(**SLOW))
+
+
+def constant_level_error(monkeypatch) -> None:
+    """Every calibration leaves a level it read its ``friction_accuracy`` at every pose.
+
+    As before ``CalibrationParameters.level_slope``: the error did not grow from the
+    readings' scatter at the pose with the travel from it.
+    """
+    _built_as(monkeypatch, CalibrationParameters(level_slope=None))
 
 
 def _built_as(monkeypatch, before) -> None:

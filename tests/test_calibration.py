@@ -112,10 +112,11 @@ def test_the_motion_slides_above_the_stribeck_range_and_reads_the_level(yumi, sl
 def test_a_level_nothing_measured_carries_the_unit_spread(yumi):
     """Uncalibrated every joint's friction error is ≥ 0.35; calibrated, a measured one's 0.2.
 
-    A joint the calibration could not slide keeps 0.35; the Coulomb compensation's ceiling
-    uses the same errors; ``unmeasured_friction_error = 0`` trusts the model's own, and a
-    model given to the controller (identified on this arm) keeps its own. The friction
-    margin takes each whole error.
+    A joint the calibration could not slide keeps 0.35; a measured one carries at most 0.2,
+    less near the pose it was read at (``level_error``, tests/test_measured_level.py); the
+    Coulomb compensation's ceiling uses the same errors; ``unmeasured_friction_error = 0``
+    trusts the model's own, and a model given to the controller (identified on this arm)
+    keeps its own. The friction margin takes each whole error.
     """
     plant = sample_plant(yumi, 1, "dry")  # stiction holds joint 3 in its calibration
     controller = LeadThrough(yumi, calibrate=True)
@@ -123,13 +124,16 @@ def test_a_level_nothing_measured_carries_the_unit_spread(yumi):
     simulate(DigitalTwin(yumi, plant.config), controller, 1.2)
     measured = controller.calibration.measured
     assert controller.calibration.accepted and not measured.all() and measured.any()
-    np.testing.assert_allclose(controller.law.friction_error, np.where(measured, 0.2, 0.35))
+    np.testing.assert_allclose(controller.level_error.far, np.where(measured, 0.2, 0.35))
+    error = controller.law.friction_error
+    assert np.all(error[measured] <= 0.2) and np.all(error[~measured] == 0.35)
     np.testing.assert_array_equal(
         controller.feed_forward.friction_error, controller.law.friction_error
     )
     np.testing.assert_array_equal(controller.law.margin_error, controller.law.friction_error)
     controller.set_payload(0.1)  # a new model, the same knowledge of the friction
     np.testing.assert_allclose(controller.law.friction_error, np.where(measured, 0.2, 0.35))
+    np.testing.assert_allclose(controller.level_error.far, np.where(measured, 0.2, 0.35))
     trusting = LeadThroughParameters(unmeasured_friction_error=0.0)
     np.testing.assert_allclose(LeadThrough(yumi, parameters=trusting).law.friction_error, 0.2)
     identified = dataclasses.replace(FrictionModel.from_robot(yumi), relative_error=np.full(7, 0.1))

@@ -36,13 +36,15 @@ def _law_period(law: ActiveLaw, compiled: bool, q, qd, estimate, gravity, constr
 
 
 def _law_run(robot: lt.RobotDescription, parameters: LeadThroughParameters, friction,
-             compiled: bool, seed: int = 11) -> np.ndarray:  # fmt: skip
+             compiled: bool, seed: int = 11, errors: bool = False) -> np.ndarray:  # fmt: skip
     """The law's state over seeded random periods: rest, creep, pushes, limits, jumps.
 
     The pose wanders (and now and then jumps, so that tracking is lost) over the whole
     range and a little beyond (the limit zones, the end-stop reaction); the estimate is
     quiet, a push, or a large one; G is random, M(q) the model's; the fusion narrows the
-    Coulomb bands by random amounts (none, one period in seven).
+    Coulomb bands by random amounts (none, one period in seven). ``errors``: the friction
+    levels' errors change every period (``set_friction_error``, as a level read at one
+    pose has them grow with the travel).
     """
     rng = np.random.default_rng(seed)
     law = LeadThrough(robot, "active", friction=friction, parameters=parameters).law
@@ -67,22 +69,28 @@ def _law_run(robot: lt.RobotDescription, parameters: LeadThroughParameters, fric
         constraint = rng.normal(0.0, 2.0, n) if k % 3 == 0 else np.zeros(n)
         mass = mass_of(np.clip(q, robot.q_min, robot.q_max))
         law.narrowing[:] = 1.0 if k % 7 == 0 else rng.uniform(0.0, 1.0, n)  # the fused std's
+        if errors:
+            law.set_friction_error(rng.uniform(parameters.stiction_margin, 0.35, n))
         _law_period(law, compiled, q, qd, estimate, gravity, constraint, mass)
         rows.append(_state(law))
     return np.array(rows)
 
 
 @pytest.mark.parametrize(
-    "robot_name, changes, cable",
+    "robot_name, changes, cable, errors",
     [
-        ("yumi", {}, False),
-        ("yumi", {}, True),  # a position-dependent Coulomb level
-        ("yumi", {"bias_time": 0.02}, False),  # the bias learns to its bound at once
-        ("yumi", {"limit_aware": False, "assist_knee": 0.0, "position_bandwidth": 0.0}, False),
-        ("panda", {"rest_damping": 0.0, "mass_uncertainty": 0.0, "unwind_time": None}, False),
+        ("yumi", {}, False, False),
+        ("yumi", {}, True, False),  # a position-dependent Coulomb level
+        ("yumi", {}, False, True),  # levels whose error changes every period
+        ("yumi", {"bias_time": 0.02}, False, False),  # the bias learns to its bound at once
+        ("yumi", {"limit_aware": False, "assist_knee": 0.0, "position_bandwidth": 0.0}, False,
+         False),
+        ("panda", {"rest_damping": 0.0, "mass_uncertainty": 0.0, "unwind_time": None}, False,
+         False),
     ],
-)
-def test_compiled_law_equals_the_numpy_reference_over_random_periods(robot_name, changes, cable):
+)  # fmt: skip
+def test_compiled_law_equals_the_numpy_reference_over_random_periods(robot_name, changes, cable,
+                                                                     errors):  # fmt: skip
     """20 000 periods of drive, bias, weights, references and PD torque: equal to 1e-9.
 
     The friction terms (a tanh) differ by one ulp between NumPy and the compiled code;
@@ -93,8 +101,8 @@ def test_compiled_law_equals_the_numpy_reference_over_random_periods(robot_name,
     robot = getattr(lt.robots, robot_name)()
     friction = _cable(robot) if cable else lt.FrictionModel.from_robot(robot)
     parameters = LeadThroughParameters(**changes)
-    compiled = _law_run(robot, parameters, friction, compiled=True)
-    reference = _law_run(robot, parameters, friction, compiled=False)
+    compiled = _law_run(robot, parameters, friction, compiled=True, errors=errors)
+    reference = _law_run(robot, parameters, friction, compiled=False, errors=errors)
     assert np.all(np.isfinite(reference))
     weights = reference[:, robot.n_joints : 2 * robot.n_joints]
     assert 0.05 < np.mean(weights > 0.5) < 0.95 or parameters.assist_knee == 0.0  # both sides

@@ -25,8 +25,10 @@ then a resting joint's Coulomb band in the law narrowed by the joints read toget
 (``LeadThrough._build``: a level nothing measured known to 0.35), then the dither parked
 after 0.5 s of rest judged on either velocity (``DitherParameters.park_time``,
 ``Dither.slow_velocity``), then the dither parked as soon as a resting joint creeps 0.2
-mrad, and otherwise after 2 s (``DitherParameters.creep``). A faster step must reproduce
-them.
+mrad, and otherwise after 2 s (``DitherParameters.creep``), then a level the calibration
+read known to its readings' scatter at its pose, its error growing with the travel from
+there (``friction.measured_level``, ``CalibrationParameters.level_slope``). A faster step
+must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

@@ -144,12 +144,28 @@ class ActiveLaw:
             relative = np.full(self.n, p.friction_uncertainty)
         relative = np.maximum(relative, p.stiction_margin)
         self.friction_error = relative
-        self.margin_error = self.margin_share * relative
-        self._friction_tolerance = relative * friction.coulomb + 2.0 * friction.noise_std
-        self._rest_tolerance = p.stiction_margin * friction.coulomb + 2.0 * friction.noise_std
-        self._joint_constants = np.array([self._friction_tolerance, self._reference_low,
-            self._reference_high, self.margin_error, self._rest_tolerance,
-            self._speed_cap])  # fused.JOINT_ROWS  # fmt: skip
+        self._noise_band = 2.0 * friction.noise_std
+        rest_tolerance = p.stiction_margin * friction.coulomb + self._noise_band
+        self._joint_constants = np.array([relative * friction.coulomb + self._noise_band,
+            self._reference_low, self._reference_high, self.margin_share * relative,
+            rest_tolerance, self._speed_cap])  # fused.JOINT_ROWS  # fmt: skip
+        # views of its rows: set_friction_error changes them in place
+        self._friction_tolerance = self._joint_constants[0]
+        self.margin_error = self._joint_constants[3]
+        self._rest_tolerance = self._joint_constants[4]
+
+    def set_friction_error(self, relative: FloatArray) -> None:
+        """This period's relative error of each friction level [–], in place.
+
+        Where a level was read (the start-up calibration), its error grows with the
+        joint's travel from where it was read (:mod:`~leadthrough.friction.measured_level`);
+        the friction margin, the tolerance and the bias' bound follow it. ``relative`` is
+        at least ``stiction_margin`` (as :meth:`use_friction` makes it).
+        """
+        self.friction_error[:] = relative
+        np.multiply(self.margin_share, relative, out=self.margin_error)
+        np.multiply(relative, self.friction.coulomb, out=self._friction_tolerance)
+        self._friction_tolerance += self._noise_band
 
     def reset(self) -> None:
         """Forget the bias, the weights and the references."""

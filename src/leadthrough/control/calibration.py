@@ -37,7 +37,9 @@ The gravity error is explained first by a payload at the flange (a point mass ``
 kilogram at the flange), fitted by weighted least squares and taken only where it stands
 out of the gravity error the model may have anyway (:meth:`CalibrationRun.payload`), so
 that it follows the arm to other poses; what remains is a bias at q₀. The Coulomb error
-rescales the friction model.
+rescales the friction model. A level read at q₀ is known there to its readings' scatter,
+and less well the farther the joint travels from q₀
+(:meth:`Calibration.level_error`, :mod:`~leadthrough.friction.measured_level`).
 Results outside plausible bounds mean someone touched the arm: the calibration is
 refused (one line saying why) and the controller keeps its model.
 
@@ -62,6 +64,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from leadthrough.errors import ParameterError
+from leadthrough.friction.measured_level import MeasuredLevelError
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
@@ -134,6 +137,13 @@ class CalibrationParameters:
             dependence (±15 % on the plants of ``benchmarks/guiding_quality.py``) nor the
             Stribeck curve: with 0.1 released arms crept up to 349 mrad there, with 0.2
             at most 21 mrad.
+        level_slope: Fastest relative change of a Coulomb level with its joint's angle
+            [1/rad]: a level read at the pose to its readings' scatter is off by at most
+            that much more per radian the joint travels from it, up to
+            ``friction_accuracy`` (:mod:`~leadthrough.friction.measured_level`). 0.3 is
+            the plant family's steepest (±15 %, two periods per turn); the real UR10e's
+            levels change by at most 0.25 per radian over a stroke. None: the measured
+            levels carry ``friction_accuracy`` everywhere, the pose included.
     """
 
     stroke: float = 0.01
@@ -145,6 +155,7 @@ class CalibrationParameters:
     max_payload: float = 2.0
     max_friction_change: float = 0.85
     friction_accuracy: float = 0.2
+    level_slope: float | None = 0.3
 
     def __post_init__(self) -> None:
         names = ("stroke", "speed", "bandwidth", "max_speed", "max_payload",
@@ -152,6 +163,8 @@ class CalibrationParameters:
         for name in names:
             real(name, getattr(self, name), minimum=0.0, strict=True, error=ParameterError)
         real("settle_time", self.settle_time, minimum=0.0, error=ParameterError)
+        if self.level_slope is not None:
+            real("level_slope", self.level_slope, minimum=0.0, error=ParameterError)
         if not isinstance(self.cycles, int) or self.cycles < 1:
             raise ParameterError("cycles", f"must be a whole number >= 1, got {self.cycles!r}")
         if self.max_speed <= self.speed:
@@ -270,12 +283,38 @@ class Calibration:
                 nominal.relative_error, 1.0 - lowered))  # fmt: skip
         error = nominal.relative_error
         if accuracy is not None and self.measured is not None:
-            read = nominal.coulomb_level(self.pose) * self.friction_scale
-            spread = np.zeros_like(read) if self.coulomb_spread is None else self.coulomb_spread
-            reading = np.divide(spread, read, out=np.zeros_like(read), where=read > 0.0)
+            reading = self.reading_error(nominal)
             error = np.where(self.measured, np.minimum(error + reading, accuracy), error)
         return dataclasses.replace(nominal, coulomb=nominal.coulomb * self.friction_scale,
                                    relative_error=error)  # fmt: skip
+
+    def reading_error(self, nominal: FrictionModel) -> FloatArray:
+        """Each level's relative error at the pose: its readings' spread over it [–].
+
+        :attr:`coulomb_spread` over the level read (``nominal``'s at the pose times
+        :attr:`friction_scale`); zeros without a spread or where no level was read.
+        """
+        read = nominal.coulomb_level(self.pose) * self.friction_scale
+        spread = np.zeros_like(read) if self.coulomb_spread is None else self.coulomb_spread
+        return np.divide(spread, read, out=np.zeros_like(read), where=read > 0.0)
+
+    def level_error(
+        self, far: FloatArray, nominal: FrictionModel, slope: float | None, floor: float
+    ) -> MeasuredLevelError | None:
+        """How far the levels read here are off anywhere (None: nothing read, no slope).
+
+        Args:
+            far: The relative error each level carries anywhere [–] (the controller's
+                after :meth:`friction`; also that of the joints not read).
+            nominal: The friction model the readings rescaled.
+            slope: ``CalibrationParameters.level_slope`` [1/rad].
+            floor: The least relative error of any level [–] (the stiction margin).
+        """
+        if not self.accepted or self.measured is None or slope is None:
+            return None
+        at_pose = np.minimum(np.maximum(self.reading_error(nominal), floor), far)
+        return MeasuredLevelError(self.pose.copy(), np.where(self.measured, at_pose, far),
+                                  np.array(far, dtype=float), slope)  # fmt: skip
 
 
 def _robust_std(readings: FloatArray) -> FloatArray:

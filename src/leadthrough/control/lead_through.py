@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 from collections.abc import Sequence
 
 import numpy as np
@@ -45,6 +46,7 @@ from leadthrough.errors import ParameterError, failure
 from leadthrough.estimation.observer import MomentumObserver
 from leadthrough.estimation.tool_force import ToolForceFusion
 from leadthrough.estimation.wrench import ToolWrench, tool_wrench
+from leadthrough.friction.measured_level import MeasuredLevelError
 from leadthrough.friction.model import FrictionModel
 from leadthrough.logs.sample import JointState, joint_state
 from leadthrough.model.description import FloatArray, RobotDescription
@@ -278,6 +280,11 @@ class LeadThrough:
         self.calibration: Calibration | None = None
         self._gravity_correction: FloatArray | None = None  # [Nm], added to G(q)
         self._gravity_reference: FloatArray | None = None  # G where it was measured [Nm]
+        #: How far the friction levels the calibration read may be off at any pose: their
+        #: readings' scatter where they were read, growing with the travel from there
+        #: (None: no calibration accepted; the levels' errors are then constant)
+        self.level_error: MeasuredLevelError | None = None
+        self._level_errors = np.zeros(n)  # its value at the latest sample [–]
         self._calibration_run: CalibrationRun | None = None
         self._calibration_start = 0.0  # [s], set when the first sample arrives
         self._calibrating = self.calibrate  # the supervisor stays in TEACHING
@@ -305,8 +312,13 @@ class LeadThrough:
         calibrate if this one will. Returns the time it took [s].
         """
         q, limits = self.robot.home(), self.robot.velocity_limits
-        return sum(exercise(self._replica(calibrate), q, limits)
+        took = sum(exercise(self._replica(calibrate), q, limits)
                    for calibrate in {False, self.calibrate})  # fmt: skip
+        if self.calibrate:  # what follows a calibration: each level's error at q
+            start, ones = time.perf_counter(), np.ones(self.robot.n_joints)
+            MeasuredLevelError(q.copy(), 0.5 * ones, ones, 0.3).at(q, np.zeros_like(q))
+            took += time.perf_counter() - start
+        return took
 
     def _replica(self, calibrate: bool) -> LeadThrough:
         """A new controller built from this one's robot, friction, parameters, constraints."""
@@ -420,6 +432,10 @@ class LeadThrough:
         known = np.ones(n, bool) if calibration.measured is None else calibration.measured
         measured = known | self._identified
         self._build(robot, calibration.friction(self.nominal_friction, accuracy), measured)
+        self.level_error = calibration.level_error(
+            self.law.friction_error.copy(), self.nominal_friction,
+            self.parameters.calibration.level_slope,  # type: ignore[union-attr]
+            self.parameters.stiction_margin)  # fmt: skip
         # the gravity error measured at the pose goes into the model, as the payload does:
         # feed-forward, observer and supervisor all hold the arm with G(q) − bias
         self._gravity_correction = -np.asarray(calibration.bias, dtype=float)
@@ -429,11 +445,26 @@ class LeadThrough:
         self._gravity_reference = np.where(known, measured_gravity, 0.0)
         self.law.model_error.calibrate(np.zeros(self.robot.n_joints), self._gravity_reference)
 
+    def _follow_level_error(self, q: FloatArray) -> None:
+        """Each friction level's error at ``q``, everywhere it is used [–].
+
+        A level the calibration read is known to its readings' scatter where it was read
+        and less well the farther its joint travels from there
+        (:mod:`~leadthrough.friction.measured_level`): the law's margin and tolerance, the
+        compensation's ceiling and the observer's band follow it.
+        """
+        errors = self.level_error.at(q, self._level_errors)  # type: ignore[union-attr]
+        self.law.set_friction_error(errors)
+        self.observer.set_level_error(errors)
+        self.feed_forward.friction_error[:] = errors
+
     def _control(
         self, t: float, model: ModelSnapshot, tau_measured: FloatArray | None
     ) -> tuple[FloatArray, FloatArray]:
         """The guiding command [Nm] and the dither it holds [Nm]."""
         q, qd = model.q, model.qd
+        if self.level_error is not None:
+            self._follow_level_error(q)
         self._stage = "feed-forward"
         feed_forward = self.feed_forward.step(q, qd, model, t, self._gravity_reference)
         self.last_feed_forward = feed_forward

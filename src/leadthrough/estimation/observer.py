@@ -193,6 +193,7 @@ class MomentumObserver:
         self._p, self._tau, self._previous_drift = self._filter[0], self._filter[1], self._filter[2]
         self._cov_rows, self._std = self._filter[3:6], self._filter[6]
         self._error_std = self._filter[7]
+        self._relative_error = np.array(self.friction.relative_error, dtype=float)
         self._level_std = np.ascontiguousarray(self.friction.level_std, dtype=float)
         # the entries of Q_d that do not depend on Q_m (Q_m enters Q₁₁ as Q_m dt)
         self._q11_torque, self._q12, self._q22 = process_noise(
@@ -241,7 +242,17 @@ class MomentumObserver:
         q, qd = self._sample
         mean, std = self.friction.mean_and_std(qd, q)
         coulomb_variance = np.maximum(std**2 - self.friction.noise_std**2, 0.0)
-        return np.sqrt(consider_variance(mean, coulomb_variance, self.friction.level_std))
+        return np.sqrt(consider_variance(mean, coulomb_variance, self._level_std))
+
+    def set_level_error(self, relative: FloatArray) -> None:
+        """This period's relative error of each Coulomb level [–] (the model's until set).
+
+        The level error of :attr:`error_std` (and the smooth-rate variant's std): where a
+        level was read at one pose, it grows with the travel from it
+        (:mod:`~leadthrough.friction.measured_level`).
+        """
+        self._relative_error[:] = relative
+        np.multiply(relative, 1.0 / np.sqrt(3.0), out=self._level_std)
 
     def reset(self) -> None:
         """Forget the estimate; the next update starts from the measured momentum."""
@@ -356,7 +367,7 @@ class MomentumObserver:
         # v_C² from std_f² = v_C² + σ_f² (one evaluation of the friction model)
         coulomb_variance = np.maximum(friction_std**2 - self.friction.noise_std**2, 0.0)
         considered = consider_variance(friction_mean, coulomb_variance,
-                                       self.friction.relative_error)  # fmt: skip
+                                       self._relative_error)  # fmt: skip
         self._std[:] = np.sqrt(self._smooth.torque_variance + considered)
         return self.tau_ext_hat
 
