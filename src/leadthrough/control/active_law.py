@@ -159,8 +159,8 @@ class ActiveLaw:
 
         Where a level was read (the start-up calibration), its error grows with the
         joint's travel from where it was read (:mod:`~leadthrough.friction.measured_level`);
-        the friction margin, the tolerance and the bias' bound follow it. ``relative`` is
-        at least ``stiction_margin`` (as :meth:`use_friction` makes it).
+        the friction margin and the bound of the learned bias (its tolerance) follow it.
+        ``relative`` is at least ``stiction_margin`` (as :meth:`use_friction` makes it).
         """
         self.friction_error[:] = relative
         np.multiply(self.margin_share, relative, out=self.margin_error)
