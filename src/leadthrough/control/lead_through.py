@@ -450,8 +450,8 @@ class LeadThrough:
 
         A level the calibration read is known to its readings' scatter where it was read
         and less well the farther its joint travels from there
-        (:mod:`~leadthrough.friction.measured_level`): the law's margin and tolerance, the
-        compensation's ceiling and the observer's band follow it.
+        (:mod:`~leadthrough.friction.measured_level`): the law's friction margin and the
+        learned bias' bound, the compensation's ceiling and the observer's band follow it.
         """
         errors = self.level_error.at(q, self._level_errors)  # type: ignore[union-attr]
         self.law.set_friction_error(errors)

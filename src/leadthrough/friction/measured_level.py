@@ -13,7 +13,7 @@ radian). So a level read at ``q₀`` to a relative ``e₀`` is off at ``q`` by a
 per joint, with ``s`` the fastest relative change of a level per radian (the calibration's
 ``level_slope``) and ``e_far`` the error the controller allows the level anywhere (the
 model's plus the reading's, at most ``friction_accuracy``). Near the pose where it was
-read, a level is known to its reading; far from it, as well as before.
+read, a level is known to its reading; far from it, to ``e_far``, as without this.
 """
 
 from __future__ import annotations
