@@ -9,6 +9,7 @@ import leadthrough as lt
 from leadthrough.control.calibration import Calibration, CalibrationParameters
 from leadthrough.errors import ParameterError
 from leadthrough.estimation.observer import MomentumObserver
+from leadthrough.experiments.level_error import level_errors_along_travel
 from leadthrough.friction.measured_level import MeasuredLevelError, _grown
 from leadthrough.friction.model import FrictionModel
 from leadthrough.twin.plants import sample_plant
@@ -92,20 +93,13 @@ def test_the_observers_band_takes_the_level_error_it_is_given(yumi):
 
 
 @pytest.fixture(scope="module")
-def calibrated_dry(yumi):
-    """Active controllers calibrated on the dry plants of seeds 1–4, with the plants."""
-    runs = []
-    for seed in range(1, 5):
-        plant = sample_plant(yumi, seed, "dry")
-        controller = lt.LeadThrough(yumi, mode="active", calibrate=True)
-        twin = DigitalTwin(yumi, plant.config)
-        simulate(twin, controller, controller.calibration_time + 0.1, progress=False)
-        runs.append((controller, plant))
-    return runs
+def traces(yumi):
+    """The dry plants of seeds 1–4: true and stated level errors ±1 rad around the pose."""
+    return level_errors_along_travel(yumi, seeds=(1, 2, 3, 4), span=1.0, points=41)
 
 
 def test_the_grown_error_covers_the_plants_level_along_the_travel_and_is_narrower_at_the_pose(
-    yumi, calibrated_dry
+    traces,
 ):
     """Against the dry plants' true levels, ±1 rad around the calibration pose.
 
@@ -119,33 +113,39 @@ def test_the_grown_error_covers_the_plants_level_along_the_travel_and_is_narrowe
     with the reading's error), which is why the friction margin is not all that stops a
     released arm (README, *Beyond the family*).
     """
-    near, grown = [], 0
-    for controller, plant in calibrated_dry:
-        calibration = controller.calibration
-        assert calibration.accepted
-        error = controller.level_error
-        gain = np.asarray(plant.config.sensors.torque_gain)
-        for offset in np.linspace(-1.0, 1.0, 41):
-            q = calibration.pose + offset
-            true = plant.config.friction.coulomb_level(q) / gain
-            modelled = controller.friction.coulomb_level(q)
-            off = np.abs(true - modelled) / modelled
-            stated = error.at(q)
-            inside = stated < error.far
-            assert np.all(off[inside] <= stated[inside]), (offset, off, stated)
-            grown += int(inside.sum())
-            if offset == 0.0:
-                near.append(stated[calibration.measured])
-    assert grown > 4 * 7 * 41 // 5  # the grown error stands on a fifth of the samples or more
-    assert np.median(np.concatenate(near)) < 0.15
+    at_pose, grown = [], 0
+    for trace in traces:
+        inside = trace.stated < trace.far
+        assert np.all(trace.true_error[inside] <= trace.stated[inside]), trace.plant
+        grown += int(inside.sum())
+        pose = np.flatnonzero(trace.offsets == 0.0)
+        assert pose.size == 1
+        at_pose.append(trace.stated[pose[0], trace.measured])
+    assert grown > trace.stated.size * len(traces) // 5  # a fifth of the samples or more
+    assert np.median(np.concatenate(at_pose)) < 0.15
 
 
-def test_guiding_follows_the_level_error_at_the_current_pose(yumi, calibrated_dry):
+def test_guiding_follows_the_level_error_at_the_current_pose(yumi):
     """Once calibrated, each period's law, compensation ceiling and band use e(q)."""
-    controller, _ = calibrated_dry[0]
+    plant = sample_plant(yumi, 3, "dry")
+    controller = lt.LeadThrough(yumi, mode="active", calibrate=True)
+    simulate(DigitalTwin(yumi, plant.config), controller, controller.calibration_time + 0.1,
+             progress=False)  # fmt: skip
     q = controller.model.q
     expected = np.maximum(controller.level_error.at(q), controller.parameters.stiction_margin)
     np.testing.assert_allclose(controller.law.friction_error, expected)
     np.testing.assert_allclose(controller.law.margin_error, expected)
     np.testing.assert_allclose(controller.feed_forward.friction_error, expected)
     assert np.any(expected < controller.parameters.calibration.friction_accuracy)
+
+
+def test_the_figure_draws_each_joint_reads_true_and_stated_error_per_plant(traces):
+    """One panel per plant, a solid (true) and a dashed (stated) line per joint read."""
+    from leadthrough.plots.lead_through import plot_level_error
+
+    figure = plot_level_error(traces)
+    panels = [axis for axis in figure.axes if axis.get_visible()]
+    assert len(panels) == len(traces)
+    for axis, trace in zip(panels, traces, strict=True):
+        styles = [line.get_linestyle() for line in axis.get_lines()]
+        assert styles.count("-") == styles.count("--") == int(trace.measured.sum())

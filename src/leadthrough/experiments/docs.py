@@ -62,6 +62,7 @@ FIGURES = {
     "end_stop.png": ("experiments", "fig6_6.png"),
     "effort.png": ("experiments", "fig6_7.png"),
     "calibration.png": ("experiments", "calibration.png"),
+    "level_error.png": ("experiments", "level_error.png"),
 }
 #: Joints of the dither table (0-based).
 DITHER_JOINTS = (0, 3, 5)

@@ -28,6 +28,7 @@ from leadthrough.experiments.lead_through import (
     plants_table,
     robustness,
 )
+from leadthrough.experiments.level_error import LevelErrorTrace, level_errors_along_travel
 from leadthrough.experiments.observer import (
     BreakawayResult,
     DitherSweep,
@@ -65,6 +66,7 @@ class ThesisExperiments:
     effort: EffortComparison
     calibration: list[CalibrationCheck]
     releases: dict[str, ReleaseResult]
+    level_errors: list[LevelErrorTrace]
 
 
 def run_experiments(
@@ -90,8 +92,10 @@ def run_experiments(
     say("start-up calibration and other plants …")
     checks = calibration_checks(robot, friction)
     releases = robustness(robot, friction)
+    say("a level read at the calibration pose, along the travel (dry plants) …")
+    level_errors = level_errors_along_travel(robot)
     return ThesisExperiments(study, passive, guided, breakaway, sweep, stable, damping, stops,
-                             effort, checks, releases)  # fmt: skip
+                             effort, checks, releases, level_errors)  # fmt: skip
 
 
 def write_experiments(
@@ -143,6 +147,11 @@ def write_experiments(
     figure("calibration.png", lead_through_plots.plot_calibration(e.calibration),
            "the start-up calibration against each plant's truth")  # fmt: skip
     sections.append(plants_table(e.calibration, e.releases) + "\n")
+    figure(
+        "level_error.png",
+        lead_through_plots.plot_level_error(e.level_errors),
+        "a level read at the calibration pose: its true and stated error along the travel",
+    )
     report = out / "experiments.md"
     report.write_text("# leadthrough: the thesis' experiments on the twin\n\n"
                       + "\n".join(sections), encoding="utf-8")  # fmt: skip

@@ -17,6 +17,7 @@ if TYPE_CHECKING:
         EndStopResult,
         GuidedRun,
     )
+    from leadthrough.experiments.level_error import LevelErrorTrace
 
 
 def plot_effort(comparison: EffortComparison, path: str = "line") -> Figure:
@@ -128,4 +129,32 @@ def plot_calibration(checks: list[CalibrationCheck]) -> Figure:
     left.set_title("Coulomb level over the model's, per joint measured")
     right.set_title("gravity error G_model − G_true, per joint")
     right.legend(fontsize=8)
+    return figure
+
+
+def plot_level_error(traces: list[LevelErrorTrace]) -> Figure:
+    """A level read at the calibration pose: its true error and the stated one along the travel.
+
+    One panel per plant; per joint the calibration read, solid: how far the plant's
+    level is from the calibrated model's, dashed: the error the controller states (the
+    readings' scatter at the pose, growing with the travel).
+    """
+    plt = pyplot()
+    columns = min(len(traces), 2)
+    rows = -(-len(traces) // columns)
+    figure, axes = plt.subplots(rows, columns, figsize=(6 * columns, 3.6 * rows), sharex=True,
+                                sharey=True, constrained_layout=True, squeeze=False)  # fmt: skip
+    for axis, trace in zip(axes.flat, traces, strict=False):
+        for j in np.flatnonzero(trace.measured):
+            color = f"C{j}"  # a joint's colour in every panel
+            axis.plot(trace.offsets, 100 * trace.true_error[:, j], lw=1.2, color=color,
+                      label=f"joint {j + 1}")  # fmt: skip
+            axis.plot(trace.offsets, 100 * trace.stated[:, j], "--", lw=1.0, color=color)
+        axis.set_title(f"{trace.plant}: true (solid) and stated (dashed) level error")
+        axis.set_xlabel("travel from the calibration pose [rad]")
+        axis.set_ylabel("relative error [%]")
+        axis.grid(alpha=0.3)
+    axes.flat[0].legend(fontsize=8, ncol=2)
+    for axis in list(axes.flat)[len(traces) :]:
+        axis.set_visible(False)
     return figure
