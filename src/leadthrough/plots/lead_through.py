@@ -139,6 +139,8 @@ def plot_level_error(traces: list[LevelErrorTrace]) -> Figure:
     level is from the calibrated model's, dashed: the error the controller states (the
     readings' scatter at the pose, growing with the travel).
     """
+    from matplotlib.lines import Line2D
+
     plt = pyplot()
     columns = min(len(traces), 2)
     rows = -(-len(traces) // columns)
@@ -154,7 +156,9 @@ def plot_level_error(traces: list[LevelErrorTrace]) -> Figure:
         axis.set_xlabel("travel from the calibration pose [rad]")
         axis.set_ylabel("relative error [%]")
         axis.grid(alpha=0.3)
-    axes.flat[0].legend(fontsize=8, ncol=2)
+    read = sorted({int(j) for trace in traces for j in np.flatnonzero(trace.measured)})
+    handles = [Line2D([], [], color=f"C{j}", label=f"joint {j + 1}") for j in read]
+    axes.flat[0].legend(handles=handles, fontsize=8, ncol=2)  # every joint read on any plant
     for axis in list(axes.flat)[len(traces) :]:
         axis.set_visible(False)
     return figure
