@@ -149,3 +149,20 @@ def test_the_figure_draws_each_joint_reads_true_and_stated_error_per_plant(trace
     for axis, trace in zip(panels, traces, strict=True):
         styles = [line.get_linestyle() for line in axis.get_lines()]
         assert styles.count("-") == styles.count("--") == int(trace.measured.sum())
+
+
+def test_a_level_read_narrows_the_margins_coulomb_part_not_its_viscous_one(yumi):
+    """The calibration reads the level at one speed: the viscous coefficient keeps its error.
+
+    With a level known to 5 % (``set_friction_error``) and the model's 0.35 left on the
+    viscous coefficient, the margin along a sliding joint's motion is 5 % of the Coulomb
+    part plus 35 % of the viscous one (the friction model's own split of the mean).
+    """
+    law = lt.LeadThrough(yumi, mode="active").law
+    law.compiled = False
+    assert np.allclose(law.friction_error, 0.35)
+    law.set_friction_error(np.full(7, 0.05))
+    q, qd = yumi.home(), np.full(7, 0.3)
+    viscous = law.friction.viscous * qd
+    coulomb = law.friction.mean(qd, q) - viscous
+    np.testing.assert_allclose(law._friction_margin(q, qd), 0.05 * coulomb + 0.35 * viscous)

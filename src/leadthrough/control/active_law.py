@@ -69,8 +69,12 @@ class ActiveLaw:
     Attributes:
         friction_error: Relative error of the friction levels in use, per joint [–] (the
             model's, or ``friction_uncertainty``; at least ``stiction_margin``).
-        margin_error: The relative error the friction margin removes [–]
-            (:meth:`_friction_margin`): :attr:`margin_share` of :attr:`friction_error`.
+        margin_error: The relative error the friction margin removes of the Coulomb
+            part [–] (:meth:`_friction_margin`): :attr:`margin_share` of
+            :attr:`friction_error`.
+        viscous_margin_error: The same of the viscous part [–]: that of the friction
+            model in use (:meth:`use_friction`), which a reading of the level at one
+            speed does not narrow (:meth:`set_friction_error` leaves it).
         model_error: The bias learned while nobody guides (and by the calibration).
         drive: Operator torque that drives the admittance [Nm].
         weight: Operator weight of every joint [–].
@@ -148,19 +152,23 @@ class ActiveLaw:
         rest_tolerance = p.stiction_margin * friction.coulomb + self._noise_band
         self._joint_constants = np.array([relative * friction.coulomb + self._noise_band,
             self._reference_low, self._reference_high, self.margin_share * relative,
-            rest_tolerance, self._speed_cap])  # fused.JOINT_ROWS  # fmt: skip
+            rest_tolerance, self._speed_cap, self.margin_share * relative,
+        ])  # fused.JOINT_ROWS  # fmt: skip
         # views of its rows: set_friction_error changes them in place
         self._friction_tolerance = self._joint_constants[0]
         self.margin_error = self._joint_constants[3]
         self._rest_tolerance = self._joint_constants[4]
+        self.viscous_margin_error = self._joint_constants[6]
 
     def set_friction_error(self, relative: FloatArray) -> None:
         """This period's relative error of each friction level [–], in place.
 
         Where a level was read (the start-up calibration), its error grows with the
         joint's travel from where it was read (:mod:`~leadthrough.friction.measured_level`);
-        the friction margin and the bound of the learned bias (its tolerance) follow it.
-        ``relative`` is at least ``stiction_margin`` (as :meth:`use_friction` makes it).
+        the friction margin's Coulomb part and the bound of the learned bias (its
+        tolerance) follow it. Its viscous part keeps the error :meth:`use_friction` set:
+        a reading of the level says nothing of the viscous coefficient. ``relative`` is at
+        least ``stiction_margin`` (as :meth:`use_friction` makes it).
         """
         self.friction_error[:] = relative
         np.multiply(self.margin_share, relative, out=self.margin_error)
@@ -304,13 +312,14 @@ class ActiveLaw:
 
         Removed from the estimate, it makes a friction error read as friction (against
         the motion), not as a push along it: a released arm cannot run away on a model
-        whose friction is too high. Coulomb and viscous parts with the joint's
-        :attr:`margin_error`, the whole :attr:`friction_error` (a measured level's, or the
-        spread of units where nothing was measured; :attr:`margin_share`).
+        whose friction is too high. The Coulomb part with the joint's :attr:`margin_error`,
+        the whole :attr:`friction_error` (a measured level's, or the spread of units where
+        nothing was measured; :attr:`margin_share`), the viscous part with
+        :attr:`viscous_margin_error`.
         """
         viscous = self.friction.viscous * qd
         coulomb = self.friction.mean(qd, q) - viscous
-        return self.margin_error * (coulomb + viscous)
+        return self.margin_error * coulomb + self.viscous_margin_error * viscous
 
     def _admittance(
         self, q: FloatArray, qd: FloatArray, drive: FloatArray, mass: FloatArray,

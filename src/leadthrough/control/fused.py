@@ -39,7 +39,7 @@ from leadthrough.compiled import kernel
 #: viscous; ``ActiveLaw.margin_error``), the tolerance at rest and the speed cap of the
 #: references.
 JOINT_ROWS = ("friction_tolerance", "reference_low", "reference_high", "margin_error",
-              "rest_tolerance", "speed_cap")  # fmt: skip
+              "rest_tolerance", "speed_cap", "viscous_margin_error")  # fmt: skip
 #: Scalars of :func:`operator_drive`, in order.
 DRIVE_SCALARS = ("gravity_uncertainty", "dt", "bias_time", "drive_gain_uncertainty",
                  "assist_knee")  # fmt: skip
@@ -110,7 +110,7 @@ def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, sc
             residual = 0.0
         half_level = 0.5 * level[i]
         coulomb = (half_level * (upper[i] + lower[i]) + viscous[i]) - viscous[i]
-        margin = joint[3, i] * (coulomb + viscous[i])
+        margin = joint[3, i] * coulomb + joint[6, i] * viscous[i]
         residual = (residual - margin) - gain_uncertainty * feedback[i]
         unknown = abs(gravity[i])
         changed = abs(gravity[i] - gravity_learned[i])
