@@ -35,9 +35,10 @@ import math
 from leadthrough.compiled import kernel
 
 #: Rows of the per-joint constants: the friction tolerance 2σ + relative τ_C, the low and
-#: high reference limits, the relative error the friction margin removes (Coulomb and
-#: viscous; ``ActiveLaw.margin_error``), the tolerance at rest and the speed cap of the
-#: references.
+#: high reference limits, the relative error the friction margin removes of the Coulomb
+#: part (``ActiveLaw.margin_error``), the tolerance at rest, the speed cap of the
+#: references, and the relative error the margin removes of the viscous part
+#: (``ActiveLaw.viscous_margin_error``).
 JOINT_ROWS = ("friction_tolerance", "reference_low", "reference_high", "margin_error",
               "rest_tolerance", "speed_cap", "viscous_margin_error")  # fmt: skip
 #: Scalars of :func:`operator_drive`, in order.
