@@ -314,9 +314,11 @@ class LeadThrough:
         q, limits = self.robot.home(), self.robot.velocity_limits
         took = sum(exercise(self._replica(calibrate), q, limits)
                    for calibrate in {False, self.calibrate})  # fmt: skip
-        if self.calibrate:  # what follows a calibration: each level's error at q
+        calibration = self.parameters.calibration
+        slope = None if calibration is None else calibration.level_slope
+        if self.calibrate and slope is not None:  # what follows a calibration: e(q)
             start, ones = time.perf_counter(), np.ones(self.robot.n_joints)
-            MeasuredLevelError(q.copy(), 0.5 * ones, ones, 0.3).at(q, np.zeros_like(q))
+            MeasuredLevelError(q.copy(), 0.5 * ones, ones, float(slope)).at(q, np.zeros_like(q))
             took += time.perf_counter() - start
         return took
 
