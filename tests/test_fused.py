@@ -23,7 +23,7 @@ def _state(law: ActiveLaw) -> np.ndarray:
     """Everything the active law keeps or produces, in one row."""
     references, bias = law.references, law.model_error
     return np.concatenate([law.drive, law.weight, law.feedback, law.sustained,
-                           law.damping_weight,
+                           law.damping_weight, law.signed_weight,
                            bias.bias, bias.gravity_learned, [bias.confidence],
                            references.q_ref, references.qd_ref])  # fmt: skip
 
@@ -159,10 +159,12 @@ def _velocities(rng: np.random.Generator, k: int, n: int) -> np.ndarray:
 
 
 def _feed_forward_run(parameters: DitherParameters | None, clock: bool, compiled: bool,
-                      delay: int | None, capped: bool) -> np.ndarray:  # fmt: skip
+                      delay: int | None, capped: bool,
+                      pushed: bool = False) -> np.ndarray:  # fmt: skip
     """Parts, total and dither state over 10 000 seeded periods (NaN speeds too).
 
     ``capped``: a compensation ceiling, with gravity references of every size (or none).
+    ``pushed``: an operator's push in [−1, 1] in two periods of three (none in the third).
     The pose changes with each phase of :func:`_velocities`; in half the phases every
     joint creeps, at up to 0.3 mrad/s (the dither's creep limit crossed or not).
     """
@@ -184,7 +186,9 @@ def _feed_forward_run(parameters: DitherParameters | None, clock: bool, compiled
         reference = None if k % 3 == 0 else rng.normal(0.0, (1.0, 5.0)[k % 2], 7)
         if k % 1009 == 7 and reference is not None:
             reference[k % 7] = np.nan
-        parts = feed_forward.step(q, qd, None, 1.7e9 + 0.004 * k if clock else None, reference)
+        push = rng.uniform(-1.0, 1.0, 7) if pushed and k % 3 else None
+        parts = feed_forward.step(q, qd, None, 1.7e9 + 0.004 * k if clock else None, reference,
+                                  push)  # fmt: skip
         state = [] if dither is None else [dither.active, [dither.parked]]
         if delay is not None:
             state.append(parts.dither_in_measurement)
@@ -193,21 +197,21 @@ def _feed_forward_run(parameters: DitherParameters | None, clock: bool, compiled
 
 
 @pytest.mark.parametrize(
-    "park_time, creep, clock, dithered, delay, capped",
+    "park_time, creep, clock, dithered, delay, capped, pushed",
     [
-        (2.0, 2e-4, True, True, None, False),
-        (None, 2e-4, True, True, 2, False),
-        (0.5, None, False, True, 1, True),
-        (None, None, True, True, None, False),
-        (2.0, 2e-4, True, False, 2, True),
+        (2.0, 2e-4, True, True, None, False, False),
+        (None, 2e-4, True, True, 2, False, True),
+        (0.5, None, False, True, 1, True, True),
+        (None, None, True, True, None, False, False),
+        (2.0, 2e-4, True, False, 2, True, False),
     ],
 )
 def test_compiled_feed_forward_equals_the_numpy_reference(park_time, creep, clock, dithered,
-                                                          delay, capped):  # fmt: skip
-    """10 000 periods (rest, park, creep, joints starting and stopping): same torques, state."""
+                                                          delay, capped, pushed):  # fmt: skip
+    """10 000 periods (rest, park, creep, starts and stops, a push or none): same torques."""
     parameters = DitherParameters(park_time=park_time, creep=creep) if dithered else None
-    compiled = _feed_forward_run(parameters, clock, True, delay, capped)
-    reference = _feed_forward_run(parameters, clock, False, delay, capped)
+    compiled = _feed_forward_run(parameters, clock, True, delay, capped, pushed)
+    reference = _feed_forward_run(parameters, clock, False, delay, capped, pushed)
     if capped:  # the ceiling binds in some periods, not in all
         free = _feed_forward_run(parameters, clock, False, delay, False)
         moving = np.abs(free[:, :7]) > 1e-9

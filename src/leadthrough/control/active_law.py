@@ -38,6 +38,7 @@ from leadthrough.control.admittance import (
     operator_weight,
     reanchored,
     settled_reference,
+    signed_push_weight,
     tracking_torque,
     unwound,
     virtual_damping,
@@ -79,6 +80,12 @@ class ActiveLaw:
         drive: Operator torque that drives the admittance [Nm].
         weight: Operator weight of every joint [–].
         residual: The operator torque before its weight [Nm].
+        signed_weight: How surely, and which way, the push (residual plus the constraints'
+            torque) drives each joint [–], in [−1, 1], averaged over ``push_time`` as
+            :attr:`sustained` is (:func:`~leadthrough.control.admittance.signed_push_weight`;
+            a stiff hand's oscillation must not swing it). The Coulomb
+            compensation of a joint below its velocity ramp follows it
+            (:mod:`~leadthrough.friction.compensation`).
         uncertainty: What the model may read without an operator, per joint [Nm]: the
             scale of :attr:`weight` and :attr:`damping_weight`.
         sustained: The push (residual plus constraints' torque) along each joint's
@@ -182,6 +189,7 @@ class ActiveLaw:
         self.drive = np.zeros(n)
         self.weight = np.zeros(n)
         self.residual = np.zeros(n)
+        self.signed_weight = np.zeros(n)
         self.uncertainty = np.zeros(n)
         self.sustained = np.zeros(n)
         self.damping_weight = np.zeros(n)
@@ -245,13 +253,13 @@ class ActiveLaw:
         qd = self.sliding_velocity(qd)
         if not self.compiled:
             self._update_drive(estimate, q, qd, gravity)
-            return self.drive
-        self.friction_terms(q, qd)  # into the rows the compiled drive reads
-        bias, (level, viscous, upper, lower) = self.model_error, self._term_rows
-        bias.confidence = operator_drive(estimate, q, gravity, level, viscous, upper, lower,
-            self._joint_constants, self._drive_scalars, self.narrowing, bias.bias,
-            bias.gravity_learned, bias.confidence, self.weight, self.drive, self.feedback,
-            self.residual, self.uncertainty)  # fmt: skip
+        else:
+            self.friction_terms(q, qd)  # into the rows the compiled drive reads
+            bias, (level, viscous, upper, lower) = self.model_error, self._term_rows
+            bias.confidence = operator_drive(estimate, q, gravity, level, viscous, upper,
+                lower, self._joint_constants, self._drive_scalars, self.narrowing, bias.bias,
+                bias.gravity_learned, bias.confidence, self.weight, self.drive,
+                self.feedback, self.residual, self.uncertainty)  # fmt: skip
         return self.drive
 
     def tracking(
@@ -273,8 +281,8 @@ class ActiveLaw:
         references = self.references
         admittance_law(q, qd, self.drive, constraint, mass, self.residual, self.uncertainty,
                        self._joint_constants, self._admittance_scalars, references.q_ref,
-                       references.qd_ref, self.sustained, self.damping_weight, self.feedback,
-                       self._work)  # fmt: skip
+                       references.qd_ref, self.sustained, self.damping_weight,
+                       self.signed_weight, self.feedback, self._work)  # fmt: skip
         return self.feedback
 
     def _update_drive(
@@ -349,6 +357,8 @@ class ActiveLaw:
                                      unwound(references.qd_ref, qd, self._unwind_rate))  # fmt: skip
         moving = motion_sign(references.qd_ref, p.rest_velocity)
         self.damping_weight = self._damping_weight(push, moving)
+        pushed = signed_push_weight(push, self.uncertainty, p.assist_knee)
+        self.signed_weight = self.signed_weight + self._push_average * (pushed - self.signed_weight)
         q_ref = settled_reference(references.q_ref, q, moving, self.damping_weight,
                                   self._settle_rate)  # fmt: skip
         references = AdmittanceState(q_ref, references.qd_ref)

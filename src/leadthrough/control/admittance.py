@@ -112,6 +112,22 @@ def operator_weight(residual: FloatArray, uncertainty: FloatArray, knee: float) 
     return z2 / (1.0 + z2)
 
 
+def signed_push_weight(push: FloatArray, uncertainty: FloatArray, knee: float) -> FloatArray:
+    """How surely, and which way, a push drives each joint, in (−1, 1) [–].
+
+    :func:`operator_weight` of the push with the push's sign. The Coulomb compensation of
+    a joint below its velocity ramp follows it (averaged over ``push_time``:
+    :attr:`~leadthrough.control.active_law.ActiveLaw.signed_weight`), so a joint the
+    operator pushes is compensated as surely as the law reads the push, in its direction.
+
+    Args:
+        push: The residual plus the constraints' torque [Nm].
+        uncertainty: As for :func:`operator_weight` [Nm].
+        knee: As for :func:`operator_weight` [–].
+    """
+    return np.sign(push) * operator_weight(push, uncertainty, knee)
+
+
 def motion_sign(qd_ref: FloatArray, rest_velocity: float) -> FloatArray:
     """Smooth sign of each joint's motion, in (−1, 1) [–]: ``q̇ / √(q̇² + v_rest²)``.
 

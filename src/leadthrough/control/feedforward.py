@@ -182,6 +182,7 @@ class PassiveFeedForward:
         self._no_slow = np.zeros(n)
         self._no_position = np.full(n, np.nan)
         self._no_reference = np.zeros(n)
+        self._no_push = np.zeros(n)
         self._no_active = np.zeros(n, dtype=bool)
 
     def reset(self) -> None:
@@ -199,6 +200,7 @@ class PassiveFeedForward:
         model: ModelSnapshot | None = None,
         t: float | None = None,
         gravity_reference: FloatArray | None = None,
+        push: FloatArray | None = None,
     ) -> FeedForwardTorques:
         """The feed-forward for joint readings q [rad] and velocities q̇ [rad/s].
 
@@ -211,6 +213,10 @@ class PassiveFeedForward:
             gravity_reference: G where the gravity model's error was last measured (the
                 start-up calibration's pose) [Nm]: the model may be off by
                 ``gravity_uncertainty`` times the change since. None: zero (all of G).
+            push: How surely and which way the operator pushes each joint [–], in
+                [−1, 1] (active mode: the law's signed weight); below the velocity ramp the
+                Coulomb compensation follows it (:mod:`~leadthrough.friction.compensation`).
+                None: zero, the thesis' law.
         """
         q, velocity = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
         gravity = self.dynamics.gravity(q) if model is None else model.gravity
@@ -219,9 +225,10 @@ class PassiveFeedForward:
         reference = self._no_reference if gravity_reference is None else gravity_reference
         if not (self.compiled and math.isfinite(now) and velocity.shape == gravity.shape
                 and q.shape == gravity.shape):  # fmt: skip
-            return self._numpy_step(q, velocity, gravity, now, wave, reference)
+            return self._numpy_step(q, velocity, gravity, now, wave, reference, push)
         parts = np.empty((3, gravity.shape[0]))  # friction, dither, total
-        compensation, errors = self.compensation, (self.friction_error, reference)
+        pushed = self._no_push if push is None else push
+        compensation, errors = self.compensation, (self.friction_error, reference, pushed)
         level = compensation.friction.coulomb_level(q)
         if dither is None:
             _feed_forward_step(q, velocity, level, gravity, *errors, self._no_rest,
@@ -246,6 +253,7 @@ class PassiveFeedForward:
         now: float,
         wave: float,
         reference: FloatArray,
+        push: FloatArray | None,
     ) -> FeedForwardTorques:
         """:meth:`step` with the NumPy code of :class:`Dither` and :class:`CoulombCompensation`."""
         ceiling = None
@@ -260,8 +268,8 @@ class PassiveFeedForward:
             base = self.compensation.parameters.dead_band
             dead_band = np.where(self.dither.active, self.dither.parameters.moving_velocity, base)
         # (gravity, friction, dither, dither_in_measurement), positional: the cheaper call
-        return FeedForwardTorques(gravity, self.compensation.step(qd, q, dead_band, ceiling),
-                                  dither, self._measured(dither))  # fmt: skip
+        friction = self.compensation.step(qd, q, dead_band, ceiling, push)
+        return FeedForwardTorques(gravity, friction, dither, self._measured(dither))
 
     def _measured(self, dither: FloatArray) -> FloatArray | None:
         """The dither the measured torque holds now, after recording this period's."""
@@ -279,9 +287,9 @@ FEED_FORWARD_SCALARS = ("moving_velocity", "rest_time", "park_time", "dt", "dead
 
 
 @kernel
-def _feed_forward_step(q, qd, level, gravity, friction_error, reference, rest_since, slow,
-                       position, anchor, active, filtered, parts, dithering, now, quiet_since,
-                       amplitude, scalars):  # fmt: skip
+def _feed_forward_step(q, qd, level, gravity, friction_error, reference, push, rest_since,
+                       slow, position, anchor, active, filtered, parts, dithering, now,
+                       quiet_since, amplitude, scalars):  # fmt: skip
     """One period of :class:`PassiveFeedForward`, in place; returns the new ``quiet_since``.
 
     The same decisions and arithmetic, in the same order, as the NumPy reference
@@ -299,7 +307,8 @@ def _feed_forward_step(q, qd, level, gravity, friction_error, reference, rest_si
     ``elapsed + dt >= duration − dt / 2``; the compensation ramp ends at
     ``max(q̇₁, 2 q̇₀)``, the level ``ε τ_C`` capped by
     :func:`~leadthrough.friction.compensation.compensation_ceiling` (its ``max(·, 0)`` as
-    written there; ``gravity_uncertainty`` NaN: no cap), then the low-pass filter.
+    written there; ``gravity_uncertainty`` NaN: no cap), below the ramp the ``push``
+    (zeros: the thesis' law), then the low-pass filter.
     ``parts`` gets the rows
     friction, dither and gravity + friction + dither [Nm]. Without ``dithering`` the
     dither state is not touched and the dead-band is q̇₀ on every joint.
@@ -367,7 +376,7 @@ def _feed_forward_step(q, qd, level, gravity, friction_error, reference, rest_si
             cap = surely - gravity_uncertainty * abs(gravity[i] - reference[i])
             cap = cap if cap > 0.0 or cap != cap else 0.0  # np.maximum(·, 0)
             compensated = compensated if compensated < cap or compensated != compensated else cap
-        raw = ramp * sign * compensated
+        raw = (ramp * sign + (1.0 - ramp) * push[i]) * compensated
         filtered[i] = pole * filtered[i] + (1.0 - pole) * raw
         parts[0, i], parts[1, i] = filtered[i], dither
         parts[2, i] = gravity[i] + filtered[i] + dither

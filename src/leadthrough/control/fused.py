@@ -156,7 +156,7 @@ def sliding_velocity(qd, rest_velocity, out):
 
 @kernel
 def admittance_law(q, qd, drive, constraint, mass, residuals, uncertainty, joint, scalars, q_ref,
-                   qd_ref, sustained, damping_weight, feedback, work):  # fmt: skip
+                   qd_ref, sustained, damping_weight, signed_weight, feedback, work):  # fmt: skip
     """One period of the admittance and its tracking PD, in place (``feedback`` [Nm]).
 
     Args:
@@ -173,6 +173,8 @@ def admittance_law(q, qd, drive, constraint, mass, residuals, uncertainty, joint
         qd_ref: Velocity reference [rad/s], updated.
         sustained: The push along the motion, averaged over ``push_time`` [Nm], updated.
         damping_weight: Weight that sets the virtual damping [–], written.
+        signed_weight: The push's weight signed by it, averaged over ``push_time`` [–],
+            updated (:func:`~leadthrough.control.admittance.signed_push_weight`).
         feedback: Tracking torque [Nm], written.
         work: Scratch space, (n, n + 1).
     """
@@ -199,14 +201,20 @@ def admittance_law(q, qd, drive, constraint, mass, residuals, uncertainty, joint
         along = sustained[i] if sustained[i] > 0.0 or sustained[i] != sustained[i] else 0.0
         idle = push_in * (1.0 - abs(moving))
         push = math.sqrt(idle * idle + along * along)
+        sign = 1.0 if push_in > 0.0 else (-1.0 if push_in < 0.0 else push_in)  # np.sign
         if knee == 0.0:
             damping_weight[i] = 1.0
+            pushed = sign
         else:
             u = uncertainty[i]
             floor = u if u > 1e-12 or u != u else 1e-12
             z = push / (knee * floor)
             z2 = z * z
             damping_weight[i] = z2 / (1.0 + z2)
+            z = push_in / (knee * floor)
+            z2 = z * z
+            pushed = sign * (z2 / (1.0 + z2))
+        signed_weight[i] = signed_weight[i] + average * (pushed - signed_weight[i])
         # the admittance at rest and no push: the reference follows the joint (settled_reference)
         q_ref[i] += settle * ((1.0 - abs(moving)) * (1.0 - damping_weight[i])) * (q[i] - q_ref[i])
     for i in range(n):

@@ -6,19 +6,21 @@ One step, in order, on the robot's sample (its time stamp is the one clock):
    the model of the arm at it is computed once (:meth:`Dynamics.snapshot`: G, M, Cᵀq̇,
    the TCP Jacobian and pose; G with the start-up calibration's correction) and handed
    to every step below;
-2. feed-forward ``τ_ff = G(q) + τ_fc(q̇) + dither`` (thesis eq. 6.3, §5.3), the Coulomb
-   compensation below the friction surely there minus the gravity error that may be;
-3. the Kalman observer estimates ``τ̂_ext`` from the measured torque (or the command
+2. the Kalman observer estimates ``τ̂_ext`` from the measured torque (or the command
    sent, if the robot measures none), dither removed, each joint alone; the joints'
    estimates are then read together as a force at the tool
    (:mod:`~leadthrough.estimation.tool_force`): a joint that stiction holds takes its
    share of the force the sliding joints read;
-4. the operator torque: model error must not become motion (a learned bias and the
+3. the operator torque: model error must not become motion (a learned bias and the
    friction the model may overstate removed, the rest weighed by the model's own
    uncertainty; :class:`~leadthrough.control.active_law.ActiveLaw`);
-5. active mode: the admittance model turns it (plus virtual constraints) into references,
+4. active mode: the admittance model turns it (plus virtual constraints) into references,
    tracked by a PD whose gains follow M(q) (thesis eqs. 6.4–6.6; the same
    :class:`~leadthrough.control.active_law.ActiveLaw`);
+5. feed-forward ``τ_ff = G(q) + τ_fc(q̇) + dither`` (thesis eq. 6.3, §5.3), the Coulomb
+   compensation below the friction surely there minus the gravity error that may be; in
+   active mode a joint below the compensation's velocity ramp is compensated as surely,
+   and in the direction, as the admittance reads a push on it;
 6. the supervisor limits the command (torque, joint and TCP speed, soft walls).
 
 An exception in any of these latches the supervisor's fault naming the exception and
@@ -467,9 +469,6 @@ class LeadThrough:
         q, qd = model.q, model.qd
         if self.level_error is not None:
             self._follow_level_error(q)
-        self._stage = "feed-forward"
-        feed_forward = self.feed_forward.step(q, qd, model, t, self._gravity_reference)
-        self.last_feed_forward = feed_forward
         applied, dither = self._measured(tau_measured)
         self._stage = "observer"
         estimate = self.observer.update(q, qd, applied - dither, model)
@@ -480,15 +479,25 @@ class LeadThrough:
             self.law.narrow(self.fusion.std, own_std)
         self._stage = "operator torque"
         self.law.operator_torque(estimate, q, qd, model.gravity)
-        torque = feed_forward.total
         self._stage = "constraints"
         constraint = self._no_constraint
         if self.constraints:
             constraint, _ = constraint_torque(self.constraints, self.dynamics, q, qd, model)
-        if self.mode == "passive":
-            return (torque + constraint if self.constraints else torque), feed_forward.dither
-        self._stage = "admittance"
-        return torque + self.law.tracking(q, qd, constraint, model.mass), feed_forward.dither
+        active = self.mode == "active"
+        follow_push = active and self.parameters.compensation.follow_push
+        if active:
+            self._stage = "admittance"
+            tracking = self.law.tracking(q, qd, constraint, model.mass)
+        self._stage = "feed-forward"
+        # active: a joint below its compensation's velocity ramp is compensated as surely,
+        # and in the direction, as the admittance reads a push on it (compensation.py)
+        push = self.law.signed_weight if follow_push else None
+        feed_forward = self.feed_forward.step(q, qd, model, t, self._gravity_reference, push)
+        self.last_feed_forward = feed_forward
+        torque = feed_forward.total
+        if active:
+            return torque + tracking, feed_forward.dither
+        return (torque + constraint if self.constraints else torque), feed_forward.dither
 
 
 @kernel

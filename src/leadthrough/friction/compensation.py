@@ -10,6 +10,17 @@ joint moves faster than the velocity noise, so that the arm still stops when rel
 then smoothed by the filter H(z) of eq. (4.6) so that the operator feels no jolt when
 a joint starts moving. While dithering, the dead-band q̇₀ is widened (thesis §5.3).
 
+Active lead-through knows more than the velocity: how surely, and which way, the
+operator pushes each joint (the law's signed weight ``p`` in [−1, 1]). Below the ramp
+the compensation follows that push instead of falling to zero::
+
+    τ_fc = (r(q̇) sign(q̇) + (1 − r(q̇)) p) ε τ_C,     r(q̇) the ramp above, in [0, 1]
+
+so a joint the operator pushes keeps its compensation when it slows or sticks in the
+middle of the push (no ε τ_C that flickers on and off with a velocity near q̇₀), and a
+joint at rest under a push it believes starts with it. ``p = 0`` (passive mode, nobody
+pushing) is the thesis' law.
+
 ε < 1 keeps the released arm stopping only if nothing else pushes it. A gravity model
 that is off by ΔG pushes too, so the compensated level may also be capped per joint by
 a **ceiling** [Nm] (:func:`compensation_ceiling`): the friction that is surely there,
@@ -40,11 +51,15 @@ class CoulombCompensationParameters:
         dead_band: q̇₀, no compensation below it [rad/s] (thesis: 0.003, above the noise).
         full_velocity: q̇₁, full compensation above it [rad/s] (not given in the thesis;
             0.01 rad/s, a few times q̇₀, ramps in over a fraction of a degree per second).
+        follow_push: Active lead-through only: below the ramp the compensation follows
+            how surely, and which way, the admittance reads a push on the joint (module
+            docstring). False: the thesis' law in both modes.
     """
 
     fraction: float = 0.7
     dead_band: float = 0.003
     full_velocity: float = 0.01
+    follow_push: bool = True
 
     def __post_init__(self) -> None:
         real("fraction", self.fraction, minimum=0.0, error=ParameterError)
@@ -53,6 +68,8 @@ class CoulombCompensationParameters:
         real("dead_band", self.dead_band, minimum=0.0, error=ParameterError)
         if real("full_velocity", self.full_velocity, error=ParameterError) <= self.dead_band:
             raise ParameterError("full_velocity", "must be above dead_band")
+        if not isinstance(self.follow_push, bool):
+            raise ParameterError("follow_push", f"must be true or false, got {self.follow_push!r}")
 
 
 def coulomb_compensation(
@@ -62,10 +79,13 @@ def coulomb_compensation(
     dead_band: ArrayLike,
     full_velocity: ArrayLike,
     ceiling: ArrayLike | None = None,
+    push: ArrayLike | None = None,
 ) -> FloatArray:
     """The law above, unfiltered [Nm]; arrays broadcast over joints (and samples).
 
-    ``ceiling`` [Nm], if given, caps the compensated level ``ε τ_C`` per joint.
+    ``ceiling`` [Nm], if given, caps the compensated level ``ε τ_C`` per joint. ``push``
+    [–], if given, is how surely and which way someone pushes each joint, in [−1, 1]:
+    below the ramp the compensation follows it (module docstring); None is zero.
     """
     qd = np.asarray(qd, dtype=float)
     dead_band = np.asarray(dead_band, dtype=float)
@@ -74,7 +94,9 @@ def coulomb_compensation(
     level = fraction * np.asarray(coulomb, dtype=float)
     if ceiling is not None:
         level = np.minimum(level, ceiling)
-    return ramp * np.sign(qd) * level
+    if push is None:
+        return ramp * np.sign(qd) * level
+    return (ramp * np.sign(qd) + (1.0 - ramp) * np.asarray(push, dtype=float)) * level
 
 
 def compensation_ceiling(
@@ -138,6 +160,7 @@ class CoulombCompensation:
         q: ArrayLike | None = None,
         dead_band: ArrayLike | None = None,
         ceiling: ArrayLike | None = None,
+        push: ArrayLike | None = None,
     ) -> FloatArray:
         """Filtered compensation torque [Nm], (n,), for velocities q̇ [rad/s].
 
@@ -148,6 +171,8 @@ class CoulombCompensation:
                 the ramp then ends at ``max(q̇₁, 2 q̇₀)``.
             ceiling: Per-joint cap on the compensated level [Nm]
                 (:func:`compensation_ceiling`); None: no cap.
+            push: How surely and which way someone pushes each joint [–], in [−1, 1]:
+                below the ramp the compensation follows it; None: zero (the thesis).
         """
         p = self.parameters
         band: float | FloatArray
@@ -158,6 +183,6 @@ class CoulombCompensation:
             band = np.asarray(dead_band, dtype=float)
             full = np.maximum(p.full_velocity, 2.0 * band)
         level = self.friction.coulomb_level(q)
-        raw = coulomb_compensation(qd, level, p.fraction, band, full, ceiling)
+        raw = coulomb_compensation(qd, level, p.fraction, band, full, ceiling, push)
         self._torque = low_pass(self._torque, raw, self._pole)
         return self._torque.copy()

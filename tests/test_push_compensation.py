@@ -1,0 +1,153 @@
+"""Coulomb compensation below the velocity ramp follows the push the active law reads.
+
+The rule (``friction/compensation.py``): ``τ_fc = (r(q̇) sign(q̇) + (1 − r(q̇)) p) ε τ_C``
+with ``p`` the law's signed weight (``ActiveLaw.signed_weight``), averaged over
+``push_time``; ``p = 0`` and passive mode are the thesis' law.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import leadthrough as lt
+from leadthrough.control.admittance import signed_push_weight
+from leadthrough.control.feedforward import PassiveFeedForward
+from leadthrough.errors import ParameterError
+from leadthrough.friction.compensation import (
+    CoulombCompensation,
+    CoulombCompensationParameters,
+    coulomb_compensation,
+)
+from leadthrough.friction.model import FrictionModel
+
+N = 7
+FRACTION, DEAD_BAND, FULL_VELOCITY = 0.7, 0.003, 0.01
+
+
+@pytest.fixture(scope="module")
+def model() -> FrictionModel:
+    """The YuMi's friction model (thesis Table 4.1)."""
+    return FrictionModel.from_robot(lt.robots.yumi())
+
+
+def _expected(qd: float, push: float, level: float) -> float:
+    """The rule for one joint, written piecewise: the push below q̇₀, the thesis above q̇₁."""
+    speed, direction = abs(qd), float(np.sign(qd))
+    if speed < DEAD_BAND:
+        return push * level
+    if speed >= FULL_VELOCITY:
+        return direction * level
+    ramp = (speed - DEAD_BAND) / (FULL_VELOCITY - DEAD_BAND)
+    return (ramp * direction + (1.0 - ramp) * push) * level
+
+
+def test_below_the_ramp_the_compensation_follows_the_push(model):
+    """At rest the push decides, moving fast the velocity; in between both, linearly."""
+    speeds = [0.0, 0.001, DEAD_BAND, 0.005, 0.0085, FULL_VELOCITY, 0.05]
+    pushes = [-1.0, -0.4, 0.0, 0.3, 1.0]
+    level = FRACTION * model.coulomb
+    for qd in [s * sign for s in speeds for sign in (1.0, -1.0)]:
+        for push in pushes:
+            got = coulomb_compensation(np.full(N, qd), model.coulomb, FRACTION, DEAD_BAND,
+                                       FULL_VELOCITY, push=np.full(N, push))  # fmt: skip
+            want = [_expected(qd, push, level[j]) for j in range(N)]
+            np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-15)
+
+
+def test_no_push_is_the_thesis_law(model):
+    """``push`` zero equals ``push`` None: passive mode, and nobody pushing, are unchanged."""
+    rng = np.random.default_rng(3)
+    qd = rng.uniform(-0.02, 0.02, (200, N))
+    args = (model.coulomb, FRACTION, DEAD_BAND, FULL_VELOCITY)
+    np.testing.assert_array_equal(coulomb_compensation(qd, *args, push=np.zeros(N)),
+                                  coulomb_compensation(qd, *args))  # fmt: skip
+
+
+def test_the_push_compensation_stays_under_the_ceiling(model):
+    """A push at rest gets at most ``min(ε τ_C, ceiling)``: a released joint still stops."""
+    ceiling = np.linspace(0.0, 1.0, N) * FRACTION * model.coulomb
+    got = coulomb_compensation(np.zeros(N), model.coulomb, FRACTION, DEAD_BAND, FULL_VELOCITY,
+                               ceiling, push=np.ones(N))  # fmt: skip
+    np.testing.assert_allclose(got, ceiling, rtol=1e-12)
+
+
+def test_a_pushed_joint_that_slows_keeps_a_steady_compensation(model):
+    """What the rule prevents: a flicker of ε τ_C as a pushed joint slows near q̇₀.
+
+    A joint the operator pushes steadily, whose speed alternates between 2 and 8 mrad/s
+    (stick-slip, the velocity noise of a slow joint): the thesis' law switches its
+    compensation between 0 and 5/7 of ε τ_C every few periods, the push keeps it at ε τ_C.
+    """
+    speeds = np.tile(np.repeat([0.002, 0.008], 5), 20)
+    swings = {}
+    for push in (None, np.ones(N)):
+        compensation = CoulombCompensation(model, dt=0.004)
+        torques = np.array([compensation.step(np.full(N, v), push=push) for v in speeds])
+        swings[push is None] = np.ptp(torques[50:], axis=0) / (FRACTION * model.coulomb)
+    assert np.all(swings[True] > 0.3)  # the thesis' law flickers
+    assert np.all(swings[False] < 1e-9)  # the push holds it
+
+
+def test_the_signed_weight_is_the_push_weighed_signed_and_averaged():
+    """``signed_weight`` → ``sign(push) · w(push)`` with the time constant ``push_time``.
+
+    The push is the residual plus the constraints' torque (a virtual wall's push against
+    the hand's counts), weighed as the operator weight weighs the residual.
+    """
+    robot = lt.robots.yumi()
+    controller = lt.LeadThrough(robot, mode="active", dt=0.004)
+    law, dynamics = controller.law, lt.Dynamics(robot)
+    q, qd = robot.home(), np.zeros(N)
+    gravity, mass = dynamics.gravity(q), dynamics.mass(q)
+    estimate = np.array([3.0, -3.0, 0.0, 2.0, -2.0, 0.5, 0.0])
+    constraint = np.array([0.0, 0.0, 0.0, -4.0, 0.0, 0.0, 0.0])  # outweighs joint 4's push
+    periods = round(controller.parameters.push_time / controller.dt)
+    for _ in range(periods):
+        law.operator_torque(estimate, q, qd, gravity)
+        law.tracking(q, qd, constraint, mass)
+    push = law.residual + constraint
+    target = signed_push_weight(push, law.uncertainty, controller.parameters.assist_knee)
+    assert np.all(np.abs(target[[0, 1, 3, 4]]) > 0.5)  # clear pushes, both ways
+    assert target[3] < 0.0  # the wall's push, not the hand's
+    pushed = [0, 1, 3, 4]
+    reached = law.signed_weight[pushed] / target[pushed]
+    np.testing.assert_allclose(reached, 1.0 - np.exp(-1.0), atol=0.03)
+    assert np.all(np.abs(law.signed_weight) <= 1.0)
+
+
+def test_passive_mode_gets_no_push_and_active_mode_its_laws(monkeypatch):
+    """The controller hands the feed-forward the law's signed weight in active mode only."""
+    robot = lt.robots.yumi()
+    seen = {}
+    original = PassiveFeedForward.step
+
+    def spy(self, q, qd, model=None, t=None, gravity_reference=None, push=None):
+        seen["push"] = None if push is None else np.array(push)
+        return original(self, q, qd, model, t, gravity_reference, push)
+
+    monkeypatch.setattr(PassiveFeedForward, "step", spy)
+    dynamics = lt.Dynamics(robot)
+    q = robot.home()
+    tau = dynamics.gravity(q) + np.array([2.0, 0, 0, 0, 0, 0, 0])  # a push on joint 1
+    thesis = lt.LeadThroughParameters(compensation=CoulombCompensationParameters(
+        follow_push=False))  # fmt: skip
+    for mode, parameters in (("passive", None), ("active", None), ("active", thesis)):
+        controller = lt.LeadThrough(robot, mode=mode, dt=0.004, parameters=parameters)
+        for _ in range(50):
+            controller.step(q, np.zeros(N), tau)
+        if mode == "passive" or parameters is thesis:
+            assert seen["push"] is None
+        else:
+            assert np.abs(controller.law.signed_weight[0]) > 0.1  # it reads the push
+            np.testing.assert_array_equal(seen["push"], controller.law.signed_weight)
+
+
+def test_follow_push_is_a_boolean_and_loads_from_toml(tmp_path):
+    """``[compensation] follow_push = false`` gives the thesis' law; a non-boolean is refused."""
+    path = tmp_path / "p.toml"
+    path.write_text("[compensation]\nfollow_push = false\n", encoding="utf-8")
+    assert not lt.LeadThroughParameters.from_toml(path).compensation.follow_push
+    assert lt.LeadThroughParameters.thesis_unstable().compensation.follow_push is False
+    with pytest.raises(ParameterError, match="follow_push"):
+        CoulombCompensationParameters(follow_push=1)  # type: ignore[arg-type]
