@@ -26,6 +26,7 @@ from leadthrough.control.admittance import operator_weight
 from leadthrough.control.calibration import CalibrationParameters
 from leadthrough.estimation.observer import MomentumObserver, ObserverParameters
 from leadthrough.estimation.tool_force import fuse
+from leadthrough.friction.compensation import CoulombCompensationParameters
 from observer_variants import SMOOTH_RATE
 
 #: A calibration that slides every joint 10 mrad at 0.1 rad/s (the default since it was
@@ -305,3 +306,14 @@ def no_credit_at_rest(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
 def no_credit_at_rest_uncalibrated(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
     """:func:`no_credit_at_rest` without the start-up calibration (passive: the same)."""
     return _build(robot, mode, cls=_NoCreditAtRest, calibrate=False)
+
+
+def follow_push(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """Active mode's compensation below the velocity ramp follows the push it reads."""
+    return _build(robot, mode, compensation=CoulombCompensationParameters(follow_push=True))
+
+
+def follow_push_uncalibrated(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """:func:`follow_push` without the start-up calibration (run with ``--uncalibrated``)."""
+    return _build(robot, mode, calibrate=False,
+                  compensation=CoulombCompensationParameters(follow_push=True))  # fmt: skip

@@ -5,7 +5,6 @@ import dataclasses
 from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.calibration import CalibrationParameters
 from leadthrough.control.dither import DitherParameters
-from leadthrough.friction.compensation import CoulombCompensationParameters
 
 #: Before: 5 mrad at 0.05 rad/s, inside the plants' Stribeck range, a level refused
 #: outside 1 / 1.75–1.75× the model's, and a level read known to ``friction_accuracy``
@@ -29,15 +28,6 @@ def constant_level_error(monkeypatch) -> None:
     readings' scatter at the pose with the travel from it.
     """
     _built_as(monkeypatch, CalibrationParameters(level_slope=None))
-
-
-def thesis_compensation(monkeypatch) -> None:
-    """Every Coulomb compensation is the thesis' law, as before it followed the push.
-
-    As before ``CoulombCompensationParameters.follow_push``: a joint below the velocity
-    ramp got no compensation in active mode either.
-    """
-    _built_as(monkeypatch, CoulombCompensationParameters(follow_push=False))
 
 
 def _built_as(monkeypatch, before) -> None:

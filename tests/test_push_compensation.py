@@ -1,8 +1,8 @@
 """Coulomb compensation below the velocity ramp follows the push the active law reads.
 
-The rule (``friction/compensation.py``): ``τ_fc = (r(q̇) sign(q̇) + (1 − r(q̇)) p) ε τ_C``
-with ``p`` the law's signed weight (``ActiveLaw.signed_weight``), averaged over
-``push_time``; ``p = 0`` and passive mode are the thesis' law.
+The rule (``friction/compensation.py``, an option: ``follow_push``): ``τ_fc = (r(q̇) sign(q̇)
++ (1 − r(q̇)) p) ε τ_C`` with ``p`` the law's signed weight (``ActiveLaw.signed_weight``),
+averaged over ``push_time``; ``p = 0``, passive mode and the default are the thesis' law.
 """
 
 from __future__ import annotations
@@ -14,12 +14,14 @@ import leadthrough as lt
 from leadthrough.control.admittance import signed_push_weight
 from leadthrough.control.feedforward import PassiveFeedForward
 from leadthrough.errors import ParameterError
+from leadthrough.experiments.guiding import Case, run_case
 from leadthrough.friction.compensation import (
     CoulombCompensation,
     CoulombCompensationParameters,
     coulomb_compensation,
 )
 from leadthrough.friction.model import FrictionModel
+from leadthrough.twin.plants import PlantRanges
 
 N = 7
 FRACTION, DEAD_BAND, FULL_VELOCITY = 0.7, 0.003, 0.01
@@ -116,8 +118,8 @@ def test_the_signed_weight_is_the_push_weighed_signed_and_averaged():
     assert np.all(np.abs(law.signed_weight) <= 1.0)
 
 
-def test_passive_mode_gets_no_push_and_active_mode_its_laws(monkeypatch):
-    """The controller hands the feed-forward the law's signed weight in active mode only."""
+def test_only_active_mode_with_follow_push_hands_the_compensation_a_push(monkeypatch):
+    """The law's signed weight reaches the feed-forward in active mode with ``follow_push``."""
     robot = lt.robots.yumi()
     seen = {}
     original = PassiveFeedForward.step
@@ -130,24 +132,46 @@ def test_passive_mode_gets_no_push_and_active_mode_its_laws(monkeypatch):
     dynamics = lt.Dynamics(robot)
     q = robot.home()
     tau = dynamics.gravity(q) + np.array([2.0, 0, 0, 0, 0, 0, 0])  # a push on joint 1
-    thesis = lt.LeadThroughParameters(compensation=CoulombCompensationParameters(
-        follow_push=False))  # fmt: skip
-    for mode, parameters in (("passive", None), ("active", None), ("active", thesis)):
+    following = lt.LeadThroughParameters(compensation=CoulombCompensationParameters(
+        follow_push=True))  # fmt: skip
+    for mode, parameters in (("passive", following), ("active", None), ("active", following)):
         controller = lt.LeadThrough(robot, mode=mode, dt=0.004, parameters=parameters)
         for _ in range(50):
             controller.step(q, np.zeros(N), tau)
-        if mode == "passive" or parameters is thesis:
+        if mode == "passive" or parameters is None:  # passive, and the default: the thesis
             assert seen["push"] is None
         else:
             assert np.abs(controller.law.signed_weight[0]) > 0.1  # it reads the push
             np.testing.assert_array_equal(seen["push"], controller.law.signed_weight)
 
 
-def test_follow_push_is_a_boolean_and_loads_from_toml(tmp_path):
-    """``[compensation] follow_push = false`` gives the thesis' law; a non-boolean is refused."""
+def test_follow_push_is_an_option_off_by_default_and_loads_from_toml(tmp_path):
+    """``[compensation] follow_push = true`` turns it on; off by default; non-booleans fail."""
     path = tmp_path / "p.toml"
-    path.write_text("[compensation]\nfollow_push = false\n", encoding="utf-8")
-    assert not lt.LeadThroughParameters.from_toml(path).compensation.follow_push
-    assert lt.LeadThroughParameters.thesis_unstable().compensation.follow_push is False
+    path.write_text("[compensation]\nfollow_push = true\n", encoding="utf-8")
+    assert lt.LeadThroughParameters.from_toml(path).compensation.follow_push is True
+    assert lt.LeadThroughParameters().compensation.follow_push is False
     with pytest.raises(ParameterError, match="follow_push"):
         CoulombCompensationParameters(follow_push=1)  # type: ignore[arg-type]
+
+
+def test_off_by_default_because_a_misread_resting_wrist_would_slide():
+    """What the default prevents: a resting joint whose push the law misreads slides.
+
+    On a plant whose levels are 0.7–1.3 of the model's (dry #1), a stiff hand pulling
+    upwards, the law reads a steady push on the resting wrist (joint 6); compensated in its
+    direction the wrist breaks away and swings at up to 1 rad/s: 2.1× passive's vibration,
+    against 1.0× with the thesis' law.
+    """
+    case = Case("dry", 1, "stiff", "upwards", PlantRanges(friction_scale=(0.7, 1.3)))
+
+    def following(robot, mode):
+        parameters = lt.LeadThroughParameters(
+            compensation=CoulombCompensationParameters(follow_push=True)
+        )
+        return lt.LeadThrough(robot, mode=mode, dt=0.004, parameters=parameters,
+                              calibrate=True)  # fmt: skip
+
+    passive = run_case(case, "passive").vibration
+    assert run_case(case, "active").vibration < 1.5 * passive
+    assert run_case(case, "active", following).vibration > 1.5 * passive

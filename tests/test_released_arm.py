@@ -24,7 +24,6 @@ from as_found import (
     friction_margin_share,
     own_rest_bands,
     slow_calibration_motion,
-    thesis_compensation,
     two_second_park,
 )
 from leadthrough.control import active_law, calibration
@@ -221,14 +220,10 @@ def test_damping_on_the_operator_weight_lets_the_released_arm_coast(monkeypatch)
     that stops the coasting arm too (its references relax to the joints friction slows);
     with the dither parked after 2 s, as then: parked after 0.5 s it ends the coast; and
     with the levels read known to the calibration's 20 % everywhere, as then: known to
-    their readings near the pose, it stops after 0.52 s and 0.6 mrad (0.57 s, 1.4 mrad);
-    and with the thesis' compensation, as then: below the velocity ramp a compensation
-    that follows the push (released, the drag the law reads) ends the coast sooner (0.54 s,
-    0.6 mrad).
+    their readings near the pose, it stops after 0.52 s and 0.6 mrad (0.57 s, 1.4 mrad).
     """
     two_second_park(monkeypatch)
     constant_level_error(monkeypatch)
-    thesis_compensation(monkeypatch)
 
     def factory(robot, mode):
         parameters = lt.LeadThroughParameters(unwind_time=None)
@@ -356,14 +351,11 @@ def test_a_joint_running_ahead_of_its_references_is_braked_not_followed(cls, run
     damping, the one thing that brakes a joint the law reads no push on, went with it.
     The feed-forward error that drives the joint here is the calibration's reading of its
     jumps (counted again for this test; see the next one), and the references are not
-    unwound, each joint's Coulomb band is its own and the compensation the thesis' (as when
-    the case was found; with a compensation that follows the push, the calibration's
-    error counted again here reads as a push at rest, and the default stops after 1.2 s).
+    unwound and each joint's Coulomb band is its own (as when the case was found).
     """
     monkeypatch.setattr(calibration, "_JUMPING", np.inf)
     _calibration_of_the_time(monkeypatch)
     own_rest_bands(monkeypatch)
-    thesis_compensation(monkeypatch)
 
     def factory(robot, mode):
         parameters = lt.LeadThroughParameters(unwind_time=None)
@@ -454,15 +446,13 @@ def test_a_refused_calibration_that_read_a_level_low_still_stops_the_released_ar
     """Refused, the run's low reading of joint 1 still widens its friction error: it stops.
 
     Without (the refused calibration left no trace) the model's level, about twice the
-    plant's, reads as a push along the motion that the 0.35 margin does not cover: the arm
-    runs past the 1 mrad drift budget (45 mrad with the thesis' compensation, 6 mrad with
-    the one that follows the push).
+    plant's, reads as a push along the motion that the 0.35 margin does not cover.
     """
     if not widened:
         monkeypatch.setattr(Calibration, "lowered", lambda self: np.ones(7))
     result = run_case(READ_LOW, "active")
     assert not result.calibrated
-    _runs_on_or_stops(result, runs, beyond=1e-3)
+    _runs_on_or_stops(result, runs, beyond=0.01)
 
 
 def _uncalibrated(**dither):

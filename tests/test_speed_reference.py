@@ -27,9 +27,8 @@ after 0.5 s of rest judged on either velocity (``DitherParameters.park_time``,
 ``Dither.slow_velocity``), then the dither parked as soon as a resting joint creeps 0.2
 mrad, and otherwise after 2 s (``DitherParameters.creep``), then a level the calibration
 read known to its readings' scatter at its pose, its error growing with the travel from
-there (``friction.measured_level``, ``CalibrationParameters.level_slope``), then the
-Coulomb compensation of a joint below its velocity ramp following the push the admittance
-reads (``CoulombCompensationParameters.follow_push``). A faster step must reproduce them.
+there (``friction.measured_level``, ``CalibrationParameters.level_slope``). A faster step
+must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

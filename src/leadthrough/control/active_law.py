@@ -83,8 +83,8 @@ class ActiveLaw:
         signed_weight: How surely, and which way, the push (residual plus the constraints'
             torque) drives each joint [–], in [−1, 1], averaged over ``push_time`` as
             :attr:`sustained` is (:func:`~leadthrough.control.admittance.signed_push_weight`;
-            a stiff hand's oscillation must not swing it). The Coulomb
-            compensation of a joint below its velocity ramp follows it
+            a stiff hand's oscillation must not swing it). With ``follow_push`` the
+            Coulomb compensation of a joint below its velocity ramp follows it
             (:mod:`~leadthrough.friction.compensation`).
         uncertainty: What the model may read without an operator, per joint [Nm]: the
             scale of :attr:`weight` and :attr:`damping_weight`.
@@ -253,13 +253,13 @@ class ActiveLaw:
         qd = self.sliding_velocity(qd)
         if not self.compiled:
             self._update_drive(estimate, q, qd, gravity)
-        else:
-            self.friction_terms(q, qd)  # into the rows the compiled drive reads
-            bias, (level, viscous, upper, lower) = self.model_error, self._term_rows
-            bias.confidence = operator_drive(estimate, q, gravity, level, viscous, upper,
-                lower, self._joint_constants, self._drive_scalars, self.narrowing, bias.bias,
-                bias.gravity_learned, bias.confidence, self.weight, self.drive,
-                self.feedback, self.residual, self.uncertainty)  # fmt: skip
+            return self.drive
+        self.friction_terms(q, qd)  # into the rows the compiled drive reads
+        bias, (level, viscous, upper, lower) = self.model_error, self._term_rows
+        bias.confidence = operator_drive(estimate, q, gravity, level, viscous, upper, lower,
+            self._joint_constants, self._drive_scalars, self.narrowing, bias.bias,
+            bias.gravity_learned, bias.confidence, self.weight, self.drive, self.feedback,
+            self.residual, self.uncertainty)  # fmt: skip
         return self.drive
 
     def tracking(

@@ -18,9 +18,9 @@ One step, in order, on the robot's sample (its time stamp is the one clock):
    tracked by a PD whose gains follow M(q) (thesis eqs. 6.4–6.6; the same
    :class:`~leadthrough.control.active_law.ActiveLaw`);
 5. feed-forward ``τ_ff = G(q) + τ_fc(q̇) + dither`` (thesis eq. 6.3, §5.3), the Coulomb
-   compensation below the friction surely there minus the gravity error that may be; in
-   active mode a joint below the compensation's velocity ramp is compensated as surely,
-   and in the direction, as the admittance reads a push on it;
+   compensation below the friction surely there minus the gravity error that may be (as
+   an option in active mode, ``follow_push``, a joint below the compensation's velocity
+   ramp is compensated as surely, and in the direction, as the admittance reads a push);
 6. the supervisor limits the command (torque, joint and TCP speed, soft walls).
 
 An exception in any of these latches the supervisor's fault naming the exception and
@@ -489,8 +489,8 @@ class LeadThrough:
             self._stage = "admittance"
             tracking = self.law.tracking(q, qd, constraint, model.mass)
         self._stage = "feed-forward"
-        # active: a joint below its compensation's velocity ramp is compensated as surely,
-        # and in the direction, as the admittance reads a push on it (compensation.py)
+        # follow_push (active, an option): a joint below its compensation's velocity ramp is
+        # compensated as surely, and in the direction, as the admittance reads a push on it
         push = self.law.signed_weight if follow_push else None
         feed_forward = self.feed_forward.step(q, qd, model, t, self._gravity_reference, push)
         self.last_feed_forward = feed_forward

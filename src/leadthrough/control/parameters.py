@@ -273,9 +273,7 @@ class LeadThroughParameters:
                    friction_uncertainty=0.0, stiction_margin=0.0, drive_gain_uncertainty=0.0,
                    bias_time=1e6,
                    reanchor_error=1e6, unwind_time=None,
-                   limit_aware=False, dither=None,
-                   compensation=CoulombCompensationParameters(follow_push=False),
-                   **changes)  # fmt: skip
+                   limit_aware=False, dither=None, **changes)  # fmt: skip
 
     @classmethod
     def from_toml(cls, path: str | Path) -> LeadThroughParameters:

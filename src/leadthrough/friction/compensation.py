@@ -19,7 +19,9 @@ the compensation follows that push instead of falling to zero::
 so a joint the operator pushes keeps its compensation when it slows or sticks in the
 middle of the push (no ε τ_C that flickers on and off with a velocity near q̇₀), and a
 joint at rest under a push it believes starts with it. ``p = 0`` (passive mode, nobody
-pushing) is the thesis' law.
+pushing) is the thesis' law, and so is the default: the rule is an option
+(``CoulombCompensationParameters.follow_push``), since a resting joint whose push the law
+misreads then slides.
 
 ε < 1 keeps the released arm stopping only if nothing else pushes it. A gravity model
 that is off by ΔG pushes too, so the compensated level may also be capped per joint by
@@ -53,13 +55,16 @@ class CoulombCompensationParameters:
             0.01 rad/s, a few times q̇₀, ramps in over a fraction of a degree per second).
         follow_push: Active lead-through only: below the ramp the compensation follows
             how surely, and which way, the admittance reads a push on the joint (module
-            docstring). False: the thesis' law in both modes.
+            docstring). Off by default: on the plant family it lightens guiding a little
+            and smooths it in the median, but a resting joint the law misreads then slides
+            (a wrist on plants whose levels are 0.7-1.3 of the model's: 2.1x passive
+            vibration; README). False: the thesis' law in both modes.
     """
 
     fraction: float = 0.7
     dead_band: float = 0.003
     full_velocity: float = 0.01
-    follow_push: bool = True
+    follow_push: bool = False
 
     def __post_init__(self) -> None:
         real("fraction", self.fraction, minimum=0.0, error=ParameterError)
