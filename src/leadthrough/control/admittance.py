@@ -116,9 +116,10 @@ def signed_push_weight(push: FloatArray, uncertainty: FloatArray, knee: float) -
     """How surely, and which way, a push drives each joint, in (−1, 1) [–].
 
     :func:`operator_weight` of the push with the push's sign. With ``follow_push`` the
-    Coulomb compensation of a joint below its velocity ramp follows it (averaged over ``push_time``:
-    :attr:`~leadthrough.control.active_law.ActiveLaw.signed_weight`), so a joint the
-    operator pushes is compensated as surely as the law reads the push, in its direction.
+    Coulomb compensation of a joint below its velocity ramp follows it, averaged over
+    ``push_time`` (:attr:`~leadthrough.control.active_law.ActiveLaw.signed_weight`): a
+    joint the operator pushes is compensated as surely as the law reads the push, in its
+    direction.
 
     Args:
         push: The residual plus the constraints' torque [Nm].
