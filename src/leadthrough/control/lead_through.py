@@ -483,21 +483,26 @@ class LeadThrough:
         constraint = self._no_constraint
         if self.constraints:
             constraint, _ = constraint_torque(self.constraints, self.dynamics, q, qd, model)
-        active = self.mode == "active"
-        follow_push = active and self.parameters.compensation.follow_push
-        if active:
-            self._stage = "admittance"
-            tracking = self.law.tracking(q, qd, constraint, model.mass)
-        self._stage = "feed-forward"
-        # follow_push (active, an option): a joint below its compensation's velocity ramp is
+        if self.mode == "passive":
+            feed_forward = self._feed_forward(t, model, None)
+            torque = feed_forward.total
+            return (torque + constraint if self.constraints else torque), feed_forward.dither
+        self._stage = "admittance"
+        tracking = self.law.tracking(q, qd, constraint, model.mass)
+        # follow_push (an option): a joint below its compensation's velocity ramp is
         # compensated as surely, and in the direction, as the admittance reads a push on it
-        push = self.law.signed_weight if follow_push else None
-        feed_forward = self.feed_forward.step(q, qd, model, t, self._gravity_reference, push)
-        self.last_feed_forward = feed_forward
-        torque = feed_forward.total
-        if active:
-            return torque + tracking, feed_forward.dither
-        return (torque + constraint if self.constraints else torque), feed_forward.dither
+        push = self.law.signed_weight if self.parameters.compensation.follow_push else None
+        feed_forward = self._feed_forward(t, model, push)
+        return feed_forward.total + tracking, feed_forward.dither
+
+    def _feed_forward(
+        self, t: float, model: ModelSnapshot, push: FloatArray | None
+    ) -> FeedForwardTorques:
+        """Gravity, Coulomb compensation and dither of this period (thesis eq. 6.3) [Nm]."""
+        self._stage = "feed-forward"
+        self.last_feed_forward = self.feed_forward.step(model.q, model.qd, model, t,
+                                                        self._gravity_reference, push)  # fmt: skip
+        return self.last_feed_forward
 
 
 @kernel

@@ -149,8 +149,7 @@ def plot_level_error(traces: list[LevelErrorTrace]) -> Figure:
     for axis, trace in zip(axes.flat, traces, strict=False):
         for j in np.flatnonzero(trace.measured):
             color = f"C{j}"  # a joint's colour in every panel
-            axis.plot(trace.offsets, 100 * trace.true_error[:, j], lw=1.2, color=color,
-                      label=f"joint {j + 1}")  # fmt: skip
+            axis.plot(trace.offsets, 100 * trace.true_error[:, j], lw=1.2, color=color)
             axis.plot(trace.offsets, 100 * trace.stated[:, j], "--", lw=1.0, color=color)
         axis.set_title(f"{trace.plant}: true (solid) and stated (dashed) level error")
         axis.set_xlabel("travel from the calibration pose [rad]")
