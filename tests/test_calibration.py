@@ -238,6 +238,72 @@ def test_touching_the_arm_during_calibration_refuses_it_and_never_faults(yumi):
     assert any(e.kind == "calibration" for e in controller.supervisor.events)
 
 
+#: Offsets of the torque measurement, ±0.2 Nm per joint: the twin's drive applies what it
+#: is commanded, but measures it this far off (a current sensor's zero).
+OFFSETS = (0.2, -0.2, 0.2, -0.2, 0.2, -0.2, 0.2)
+
+
+def _measured_with(config: TwinConfig, offsets) -> TwinConfig:
+    """``config`` whose drives measure the torque ``offsets`` [Nm] off what they apply."""
+    return dataclasses.replace(
+        config, sensors=dataclasses.replace(config.sensors, torque_offset=offsets)
+    )
+
+
+def test_an_offset_of_the_torque_measurement_is_read_and_never_commanded(yumi, monkeypatch):
+    """The drives measure 0.2 Nm off what they apply; the arm never feels that offset.
+
+    The calibration's readings carry it as if gravity were off by it. It reads the offset
+    as ``τ_measured − τ_commanded`` (to 0.05 Nm, a fifth of the YuMi's smallest Coulomb
+    level), adds it back to the gravity error, which is then the arm's (as read on the
+    same plant measuring without an offset), and takes it off every later measurement:
+    the calibrated passive arm left alone stays put. Without it (the readings' gravity
+    error alone, as before), the feed-forward commands the offset onto the arm, which
+    runs away by several radians within 5 s.
+    """
+    plant = sample_plant(yumi, 1, "lugre")
+    config = _measured_with(plant.config, OFFSETS)
+    controller = LeadThrough(yumi, "passive", calibrate=True)
+    sim = simulate(DigitalTwin(yumi, config), controller, 6.0)
+    assert controller.calibration.accepted
+    np.testing.assert_allclose(controller.torque_offset, OFFSETS, atol=0.05)
+    assert "measured torque offset up to 0.2" in controller.calibration.summary()
+    exact = LeadThrough(yumi, "passive", calibrate=True)
+    simulate(DigitalTwin(yumi, _measured_with(plant.config, None)), exact, 1.5)
+    np.testing.assert_allclose(controller.calibration.gravity_error,
+                               exact.calibration.gravity_error, atol=0.05)  # fmt: skip
+    rest = sim.t > 1.0
+    assert np.max(np.abs(sim.q_true[rest] - sim.q_true[rest][0])) < 1e-3
+    monkeypatch.setattr(CalibrationRun, "torque_offset", lambda self: None)  # as before
+    before = LeadThrough(yumi, "passive", calibrate=True)
+    ran = simulate(DigitalTwin(yumi, config), before, 6.0)
+    assert np.max(np.abs(ran.q_true[rest] - ran.q_true[rest][0])) > 0.1
+
+
+def test_a_measured_torque_far_off_its_command_refuses_the_calibration(yumi):
+    """3 Nm on joint 2 (10 % of its limit): not the motor torque the model expects.
+
+    Refused with a one-line reason naming the joint; nothing of it is used.
+    """
+    config = _measured_with(TwinConfig(seed=1), (0.0, 3.0, 0.0, 0.0, 0.0, 0.0, 0.0))
+    controller = LeadThrough(yumi, calibrate=True)
+    simulate(DigitalTwin(yumi, config), controller, 1.5)
+    result = controller.calibration
+    assert not result.accepted and "\n" not in result.reason
+    assert "joint 2's measured torque is +3.0" in result.reason
+    assert "Nm off its command: is it the motor torque?" in result.reason
+    assert result.torque_offset is None and np.all(controller.torque_offset == 0.0)
+    assert controller.state is SupervisorState.TEACHING
+
+
+def test_without_a_measured_torque_no_offset_is_read(yumi):
+    """A robot that measures no torque: the command stands for it, no offset to read."""
+    run = CalibrationRun(lt.Dynamics(yumi), FrictionModel.from_robot(yumi), yumi.home())
+    for k in range(100):
+        run.record(0.2 + 0.004 * k, np.full(7, 0.05 * (-1) ** (k // 25)), np.zeros(7))
+    assert run.torque_offset() is None and run.result().torque_offset is None
+
+
 def test_a_refused_calibration_widens_the_friction_error_of_levels_it_read_low(yumi):
     """Refused: not its readings, but how far below the model's it read a level, is used.
 
@@ -351,6 +417,7 @@ def test_without_calibration_guiding_starts_at_once(yumi, tmp_path):
         ("cycles", 1.5),
         ("max_payload", 0.0),
         ("max_speed", 0.05),
+        ("max_torque_offset", 0.0),
     ],
 )
 def test_bad_calibration_parameters_are_one_line_errors(field, value):

@@ -25,6 +25,7 @@ from as_found import (
     own_rest_bands,
     slow_calibration_motion,
     two_second_park,
+    unread_torque_offset,
 )
 from leadthrough.control import active_law, calibration
 from leadthrough.control.active_law import ActiveLaw
@@ -109,10 +110,12 @@ def _calibration_of_the_time(monkeypatch):
 
     It slid the joints 5 mrad at 0.05 rad/s, any three paced readings each way measured a
     joint's level, and a payload was a plain least-squares fit. The calibration now slides
-    faster, measures less and takes no spurious payload, which on these plants also hides
-    the mechanisms the tests below show their rules stop.
+    faster, measures less, takes no spurious payload and reads the torque measurement's
+    offset, which on these plants also hides the mechanisms the tests below show their
+    rules stop.
     """
     slow_calibration_motion(monkeypatch)
+    unread_torque_offset(monkeypatch)
     monkeypatch.setattr(calibration, "_MEASURED", 0.0)
     monkeypatch.setattr(calibration.CalibrationRun, "payload", _plain_payload_fit)
 
@@ -224,6 +227,7 @@ def test_damping_on_the_operator_weight_lets_the_released_arm_coast(monkeypatch)
     """
     two_second_park(monkeypatch)
     constant_level_error(monkeypatch)
+    unread_torque_offset(monkeypatch)
 
     def factory(robot, mode):
         parameters = lt.LeadThroughParameters(unwind_time=None)
@@ -390,6 +394,7 @@ def test_a_joint_the_calibration_read_only_a_few_times_keeps_its_level(few_read,
     calibration motion of the time (the default one slides that wrist long enough).
     """
     slow_calibration_motion(monkeypatch)
+    unread_torque_offset(monkeypatch)
     if few_read:
         monkeypatch.setattr(calibration, "_MEASURED", 0.0)
     result = run_case(FEW_READINGS, "passive", _passive())
@@ -398,7 +403,11 @@ def test_a_joint_the_calibration_read_only_a_few_times_keeps_its_level(few_read,
 
 @pytest.mark.parametrize("plain", [False, True], ids=["weighed", "plain fit"])
 def test_a_payload_the_gravity_errors_do_not_show_stays_out_of_the_model(plain, monkeypatch):
-    """Lugre #32: drive gains that look like a payload at the pose are not taken for one."""
+    """Lugre #32: drive gains that look like a payload at the pose are not taken for one.
+
+    With the calibration reading no offset of the torque measurement, as when it was found.
+    """
+    unread_torque_offset(monkeypatch)
     if plain:
         monkeypatch.setattr(calibration.CalibrationRun, "payload", _plain_payload_fit)
     result = run_case(SPURIOUS_PAYLOAD, "passive", _passive())

@@ -27,8 +27,9 @@ after 0.5 s of rest judged on either velocity (``DitherParameters.park_time``,
 ``Dither.slow_velocity``), then the dither parked as soon as a resting joint creeps 0.2
 mrad, and otherwise after 2 s (``DitherParameters.creep``), then a level the calibration
 read known to its readings' scatter at its pose, its error growing with the travel from
-there (``friction.measured_level``, ``CalibrationParameters.level_slope``). A faster step
-must reproduce them.
+there (``friction.measured_level``, ``CalibrationParameters.level_slope``), then the
+calibration reading the torque measurement's offset and taking it off
+(``Calibration.torque_offset``). A faster step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

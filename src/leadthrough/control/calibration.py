@@ -32,6 +32,18 @@ the compensation and the active law trust as surely there. A joint that slid les
 model's level, and its gravity, read from the readings it has, counts as not known (its
 whole ``G`` uncertain, as without a calibration).
 
+The readings come from the *measured* motor torque, the feed-forward acts through the
+*commanded* one. Where the two differ by an offset of the measurement (a current sensor's
+zero, which the arm never feels), the readings carry it as if gravity were off by it,
+and a gravity correction taken from them would command it onto the arm. So the
+calibration also averages ``τ_measured − τ_commanded`` over its run (the operator's push
+does not enter it; the motion's back and forth averages out the drive's ripple): that
+:attr:`Calibration.torque_offset` is added back to the gravity error, which is then the
+arm's, and taken off every later measurement (``LeadThrough``). With offsets of ±0.2 Nm
+(``benchmarks/guiding_quality.py --plants torque_offset=-0.2,0.2``) the arm calibrated
+without this ran away when released in 15 of the 28 LuGre cases in passive mode (8 in
+active mode), up to 6.1 rad.
+
 The gravity error is explained first by a payload at the flange (a point mass ``m``,
 ``G_true = G_model + m · Y(q)`` with ``Y = −J_vᵀ g`` the gravity torque of one
 kilogram at the flange), fitted by weighted least squares and taken only where it stands
@@ -137,6 +149,11 @@ class CalibrationParameters:
             dependence (±15 % on the plants of ``benchmarks/guiding_quality.py``) nor the
             Stribeck curve: with 0.1 released arms crept up to 349 mrad there, with 0.2
             at most 21 mrad.
+        max_torque_offset: Largest offset of the torque measurement it may report, a
+            fraction of each joint's torque limit [–]: a measured torque that differs more
+            from its command is not the motor torque the model expects (a torque without
+            gravity, a link-side sensor) and refuses the calibration. 5 %: 1.5 Nm on the
+            YuMi's shoulder, 0.5 Nm on its wrist.
         level_slope: Fastest relative change of a Coulomb level with its joint's angle
             [1/rad]: a level read at the pose to its readings' scatter is off by at most
             that much more per radian the joint travels from it, up to
@@ -155,11 +172,12 @@ class CalibrationParameters:
     max_payload: float = 2.0
     max_friction_change: float = 0.85
     friction_accuracy: float = 0.2
+    max_torque_offset: float = 0.05
     level_slope: float | None = 0.3
 
     def __post_init__(self) -> None:
         names = ("stroke", "speed", "bandwidth", "max_speed", "max_payload",
-                 "max_friction_change", "friction_accuracy")  # fmt: skip
+                 "max_friction_change", "friction_accuracy", "max_torque_offset")  # fmt: skip
         for name in names:
             real(name, getattr(self, name), minimum=0.0, strict=True, error=ParameterError)
         real("settle_time", self.settle_time, minimum=0.0, error=ParameterError)
@@ -202,6 +220,10 @@ class Calibration:
             their gravity error counts as not known. One that did not slide both ways at
             all (stiction held it) keeps its gravity too (no error) and does not enter the
             payload fit.
+        torque_offset: The measured motor torque minus the command it measures, averaged
+            over the run, per joint [Nm]: an offset of the measurement, which the arm never
+            felt; already added back to :attr:`gravity_error`. None: not read (no measured
+            torque, or the run stopped early).
         coulomb_spread: How far a Coulomb reading may be off, per joint [Nm]: half the
             robust spread (1.4826 × median absolute deviation) of the paced readings up
             and down, combined. A joint that sticks and jumps scatters them. Against the dry
@@ -220,6 +242,7 @@ class Calibration:
     reason: str = ""
     measured: BoolArray | None = None
     coulomb_spread: FloatArray | None = None
+    torque_offset: FloatArray | None = None
 
     def summary(self) -> str:
         """One line: what was measured, or why the calibration was refused.
@@ -235,9 +258,12 @@ class Calibration:
             return (f"{self.reason}; guiding with the model, its friction error at least what "
                     f"the levels read below it show ({low})")  # fmt: skip
         scale = self.friction_scale[self.measured]
+        offset = ""
+        if self.torque_offset is not None:
+            offset = f", measured torque offset up to {np.max(np.abs(self.torque_offset)):.3f} Nm"
         return (f"calibrated: payload {self.payload:.2f} kg, Coulomb levels "
                 f"×{scale.min():.2f}–{scale.max():.2f} of the model, gravity bias up to "
-                f"{np.max(np.abs(self.bias)):.3f} Nm")  # fmt: skip
+                f"{np.max(np.abs(self.bias)):.3f} Nm{offset}")  # fmt: skip
 
     def lowered(self) -> FloatArray:
         """Per joint, how far below the model's a refused calibration read a level [–].
@@ -375,6 +401,8 @@ class CalibrationRun:
         self._minus: list[FloatArray] = []
         # samples in which the motion drove each joint up / down at pace
         self._asked = np.zeros((2, self.pose.shape[0]))
+        self._discrepancy = np.zeros_like(self.pose)  # Σ (τ_measured − τ_commanded) [Nm]
+        self._discrepancies = 0
 
     @property
     def duration(self) -> float:
@@ -416,10 +444,23 @@ class CalibrationRun:
             self.disturbance = (f"joint {joint + 1} was {1e3 * error[joint]:.0f} mrad off the "
                                 "calibration motion: was the arm touched?")  # fmt: skip
 
-    def record(self, t: float, qd: FloatArray, estimate: FloatArray) -> None:
-        """Keep the observer's reading of joints sliding at the motion's pace, by direction."""
+    def record(
+        self, t: float, qd: FloatArray, estimate: FloatArray, discrepancy: FloatArray | None = None
+    ) -> None:
+        """Keep the observer's reading of joints sliding at the motion's pace, by direction.
+
+        Args:
+            t: Time since the calibration began [s].
+            qd: Joint velocities [rad/s].
+            estimate: The observer's reading [Nm].
+            discrepancy: The measured motor torque minus the command it measures [Nm]
+                (None: the robot measures none); averaged into the torque offset.
+        """
         if t < self.parameters.settle_time:
             return
+        if discrepancy is not None:
+            self._discrepancy += discrepancy
+            self._discrepancies += 1
         p = self.parameters
         _, velocity, _ = triangular_velocity(t - p.settle_time, p.speed, p.frequency)
         wanted = self._direction * velocity
@@ -433,16 +474,26 @@ class CalibrationRun:
         p = self.parameters
         if self.disturbance is not None:
             return self._refused(self.disturbance)
+        offset = self.torque_offset()
+        if offset is not None:
+            limit = p.max_torque_offset * self.dynamics.robot.torque_limits
+            if np.any(np.abs(offset) > limit):
+                joint = int(np.argmax(np.abs(offset) / limit))
+                return self._refused(f"joint {joint + 1}'s measured torque is "
+                                     f"{offset[joint]:+.2f} Nm off its command: is it the "
+                                     "motor torque?", offset=None)  # fmt: skip
         plus, minus = np.array(self._plus), np.array(self._minus)
         readings = np.array([np.sum(np.isfinite(plus), axis=0), np.sum(np.isfinite(minus), axis=0)])
         slid = np.all(readings >= _ENOUGH, axis=0)
         if np.count_nonzero(slid) < 0.5 * slid.size:
             joints = ", ".join(str(j + 1) for j in np.flatnonzero(~slid))
-            return self._refused(f"joint(s) {joints} did not slide both ways")
+            return self._refused(f"joint(s) {joints} did not slide both ways", offset=offset)
         measured = slid & np.all(readings >= _MEASURED * self._asked, axis=0)
         e_plus = np.nanmedian(np.where(slid, plus, 0.0), axis=0)
         e_minus = np.nanmedian(np.where(slid, minus, 0.0), axis=0)  # a stuck joint: no error
-        gravity_error = 0.5 * (e_plus + e_minus)
+        # the readings' gravity error, plus what the measurement adds that the arm never felt
+        gravity_error = 0.5 * (e_plus + e_minus) + (0.0 if offset is None else offset)
+        gravity_error = np.where(slid, gravity_error, 0.0)
         coulomb_error = np.where(measured, 0.5 * (e_plus - e_minus), 0.0)
         level = self.friction.coulomb_level(self.pose)
         # a joint modelled without friction keeps it: no level to rescale
@@ -451,17 +502,28 @@ class CalibrationRun:
         if np.any(changed):
             joint = int(np.argmax(np.where(changed, np.abs(scale - 1.0), -1.0)))
             return self._refused(f"joint {joint + 1}'s friction seems {scale[joint]:.2f}× the "
-                                 "model's: was the arm touched?", scale, measured)  # fmt: skip
+                                 "model's: was the arm touched?", scale, measured,
+                                 offset)  # fmt: skip
         per_kilogram = self.payload_regressor(self.pose)
         payload = self.payload(gravity_error, per_kilogram, slid)
         if payload > p.max_payload:
             return self._refused(f"a payload of {payload:.2f} kg is more than the "
                                  f"{p.max_payload:g} kg allowed: was the arm touched?", scale,
-                                 measured)  # fmt: skip
+                                 measured, offset)  # fmt: skip
         bias = np.where(slid, gravity_error + payload * per_kilogram, 0.0)
         spread = np.where(measured, 0.5 * np.hypot(_robust_std(plus), _robust_std(minus)), 0.0)
         return Calibration(self.pose, gravity_error, coulomb_error, payload, bias, scale, True,
-                           measured=measured, coulomb_spread=spread)  # fmt: skip
+                           measured=measured, coulomb_spread=spread,
+                           torque_offset=offset)  # fmt: skip
+
+    def torque_offset(self) -> FloatArray | None:
+        """The measured motor torque minus its command, averaged over the run [Nm].
+
+        None without a measured torque (or before the motion began).
+        """
+        if self._discrepancies == 0:
+            return None
+        return self._discrepancy / self._discrepancies
 
     def payload(
         self, gravity_error: FloatArray, per_kilogram: FloatArray, slid: BoolArray
@@ -495,15 +557,18 @@ class CalibrationRun:
         return -self.dynamics.jacobian(q)[:3].T @ self.dynamics.robot.gravity
 
     def _refused(
-        self, reason: str, scale: FloatArray | None = None, measured: BoolArray | None = None
-    ) -> Calibration:
-        """Refused: nothing of it is used but how far below the model's it read levels.
+        self, reason: str, scale: FloatArray | None = None, measured: BoolArray | None = None,
+        offset: FloatArray | None = None,
+    ) -> Calibration:  # fmt: skip
+        """Refused: only how far below the model's it read levels, and the offset, are used.
 
-        ``scale`` and ``measured``: the levels read, when the readings got that far.
+        ``scale`` and ``measured``: the levels read, when the readings got that far;
+        ``offset``: the measurement's offset, when the run was not stopped early.
         """
         n = self.pose.shape[0]
         zeros = np.zeros(n)
         scale = np.ones(n) if scale is None else scale
         measured = np.zeros(n, dtype=bool) if measured is None else measured
         return Calibration(self.pose, zeros, zeros, 0.0, zeros, scale, False,
-                           f"calibration refused: {reason}", measured)  # fmt: skip
+                           f"calibration refused: {reason}", measured,
+                           torque_offset=offset)  # fmt: skip

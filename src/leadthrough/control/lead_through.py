@@ -245,6 +245,18 @@ class LeadThrough:
         return np.zeros(self.robot.n_joints) if correction is None else correction.copy()
 
     @property
+    def torque_offset(self) -> FloatArray:
+        """The measured motor torque's offset the calibration found [Nm] (zeros without).
+
+        ``τ_measured − τ_commanded`` averaged over the calibration: an error of the
+        measurement the arm never felt. It is taken off every measured torque after the
+        calibration, and added back to the gravity error it read
+        (:attr:`Calibration.torque_offset`).
+        """
+        offset = self._torque_offset
+        return np.zeros(self.robot.n_joints) if offset is None else offset.copy()
+
+    @property
     def state(self) -> SupervisorState:
         """Supervisor state: teaching, holding or fault."""
         return self.supervisor.state
@@ -281,6 +293,9 @@ class LeadThrough:
         self.last_feed_forward: FeedForwardTorques | None = None
         self.calibration: Calibration | None = None
         self._gravity_correction: FloatArray | None = None  # [Nm], added to G(q)
+        #: The measurement's offset the calibration read, taken off every later measured
+        #: torque [Nm] (None: not read)
+        self._torque_offset: FloatArray | None = None
         self._gravity_reference: FloatArray | None = None  # G where it was measured [Nm]
         #: How far the friction levels the calibration read may be off at any pose: their
         #: readings' scatter where they were read, growing with the travel from there
@@ -389,9 +404,17 @@ class LeadThrough:
         return command
 
     def _measured(self, tau_measured: FloatArray | None) -> tuple[FloatArray, FloatArray]:
-        """The motor torque applied over the last period [Nm] and the dither it holds."""
+        """The motor torque applied over the last period [Nm] and the dither it holds.
+
+        A measured torque less the offset the calibration found in the measurement
+        (:attr:`torque_offset`); the command sent then, without one.
+        """
         sent = self._sent.measured  # rows: the command, its dither
-        return (sent[0] if tau_measured is None else tau_measured), sent[1]
+        if tau_measured is None:
+            return sent[0], sent[1]
+        if self._torque_offset is None:
+            return tau_measured, sent[1]
+        return tau_measured - self._torque_offset, sent[1]
 
     def _calibrate(
         self, t: float, model: ModelSnapshot, tau_measured: FloatArray | None
@@ -406,7 +429,8 @@ class LeadThrough:
             self._calibration_start = t
         run, elapsed = self._calibration_run, t - self._calibration_start
         applied, _ = self._measured(tau_measured)
-        run.record(elapsed, qd, self.observer.update(q, qd, applied, model))
+        discrepancy = None if tau_measured is None else tau_measured - self._sent.measured[0]
+        run.record(elapsed, qd, self.observer.update(q, qd, applied, model), discrepancy)
         command = run.command(elapsed, q, qd)
         if elapsed >= run.duration or run.disturbance is not None:
             self._finish_calibration(run.result(), t)
@@ -422,6 +446,8 @@ class LeadThrough:
         """
         self.calibration, self._calibrating = calibration, False
         self.supervisor.log("calibration", calibration.summary(), t)
+        # an offset of the measurement is the sensor's, whatever the readings were
+        self._torque_offset = calibration.torque_offset
         if not calibration.accepted:
             friction = calibration.friction(self.nominal_friction)
             if friction is not self.nominal_friction:
