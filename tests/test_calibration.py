@@ -23,6 +23,7 @@ from leadthrough.twin.operator import Hand
 from leadthrough.twin.paths import MinimumJerk
 from leadthrough.twin.plants import WIDER_RANGES, sample_plant
 from leadthrough.twin.runner import simulate
+from leadthrough.twin.sensors import SensorModel
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig
 
 MASSES_OFF = ModelError(mass_error=0.05, com_error=0.005)
@@ -294,6 +295,20 @@ def test_a_measured_torque_far_off_its_command_refuses_the_calibration(yumi):
     assert "Nm off its command: is it the motor torque?" in result.reason
     assert result.torque_offset is None and np.all(controller.torque_offset == 0.0)
     assert controller.state is SupervisorState.TEACHING
+
+
+def test_the_offset_is_read_only_once_a_command_has_reached_the_drive(yumi):
+    """No settle time: the first measurements answer no command of the calibration yet.
+
+    Before ``measurement_delay`` periods have passed, the command "sent then" is the delay
+    line's zeros, and the whole measured torque would count as offset (0.036 Nm off on the
+    shoulder over the run). A drive without ripple or noise: the offset read exactly.
+    """
+    sensors = SensorModel(torque_ripple=0.0, torque_noise_std=0.0, torque_offset=OFFSETS)
+    parameters = LeadThroughParameters(calibration=CalibrationParameters(settle_time=0.0))
+    controller = LeadThrough(yumi, parameters=parameters, calibrate=True)
+    simulate(DigitalTwin(yumi, TwinConfig(seed=1, sensors=sensors)), controller, 1.2)
+    np.testing.assert_allclose(controller.torque_offset, OFFSETS, atol=1e-3)
 
 
 def test_without_a_measured_torque_no_offset_is_read(yumi):

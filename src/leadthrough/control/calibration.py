@@ -37,7 +37,8 @@ The readings come from the *measured* motor torque, the feed-forward acts throug
 zero, which the arm never feels), the readings carry it as if gravity were off by it,
 and a gravity correction taken from them would command it onto the arm. So the
 calibration also averages ``τ_measured − τ_commanded`` over its run (the operator's push
-does not enter it; the motion's back and forth averages out the drive's ripple): that
+does not enter it; the motion's back and forth averages out most of the drive's ripple,
+whose rest, up to 0.014 Nm on the realistic twin's shoulder, joins the gravity error): that
 :attr:`Calibration.torque_offset` is added back to the gravity error, which is then the
 arm's, and taken off every later measurement (``LeadThrough``). With offsets of ±0.2 Nm
 (``benchmarks/guiding_quality.py --plants torque_offset=-0.2,0.2``) the arm calibrated

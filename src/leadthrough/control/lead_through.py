@@ -429,7 +429,11 @@ class LeadThrough:
             self._calibration_start = t
         run, elapsed = self._calibration_run, t - self._calibration_start
         applied, _ = self._measured(tau_measured)
-        discrepancy = None if tau_measured is None else tau_measured - self._sent.measured[0]
+        # what the drive measured against what it was told (once a command has reached it)
+        told = elapsed >= self.parameters.measurement_delay * self.dt
+        discrepancy = None
+        if tau_measured is not None and told:
+            discrepancy = tau_measured - self._sent.measured[0]
         run.record(elapsed, qd, self.observer.update(q, qd, applied, model), discrepancy)
         command = run.command(elapsed, q, qd)
         if elapsed >= run.duration or run.disturbance is not None:
