@@ -77,3 +77,23 @@ def test_the_unwinding_counts_where_it_costs_damping():
     assert MARGIN <= wrist_damping(always) < wrist_damping(never)
     fast = LeadThroughParameters(unwind_time=0.005)
     assert worst_damping(robot, fast, *hand, DT) < MARGIN
+
+
+def test_a_hands_own_mass_the_model_does_not_know_keeps_the_margin():
+    """The operator's hand and forearm (up to 3 kg at the tool) move with the arm.
+
+    The model does not know that mass; the observer reads its inertial force as the
+    operator's, which adds it to the virtual inertia as well as to the arm's. The defaults
+    keep ζ ≥ the margin with every hand up to 3000 N/m; an admittance lighter than the arm
+    (k_M = 0.3, unstable with a bare spring) gains damping from it, since the ratio of
+    virtual to moved inertia comes closer to 1.
+    """
+    robot = lt.robots.yumi()
+
+    def least(parameters, hand_mass):
+        return min(worst_damping(robot, parameters, k, 1.8 * np.sqrt(k), DT, delay, hand_mass)
+                   for k in (100.0, 300.0, 1000.0, 3000.0) for delay in (1, 2))  # fmt: skip
+
+    assert least(LeadThroughParameters(), 3.0) >= MARGIN
+    light = LeadThroughParameters(inertia_scale=0.3)
+    assert least(light, 0.0) < 0.0 < least(light, 1.5) < least(light, 3.0)

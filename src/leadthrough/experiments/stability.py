@@ -10,10 +10,12 @@ hand's spring pushes back. Lag in that loop acts as negative damping; with an ad
 Each joint i is taken alone (decoupled, as the observer and the gains are): arm inertia
 m_ii(q), a hand of Cartesian stiffness K_h and damping B_h seen through the joint's
 lever (k = K_h |J_v,i|², b = B_h |J_v,i|², with J_v the translational Jacobian at the
-flange), the exact stationary Kalman gains of the observer while moving, the admittance
-``k_M m ẍ_ref + D̃ ẋ_ref = τ̂`` (implicit in D̃, as the controller integrates it), the PD
-``K_P (x_ref − x) + K_D (ẋ_ref − ẋ)`` and ``delay`` periods between command and torque.
-The closed loop is a linear map of the state over one period. Its oscillatory modes
+flange), and the mass of the operator's hand and forearm moving with the tool, m_h
+|J_v,i|², which the controller's model (its observer, admittance and gains) does not
+know, the exact stationary Kalman gains of the observer while moving, the admittance
+``k_M m ẍ_ref + D̃ ẋ_ref = τ̂`` (implicit in D̃, as the controller integrates it), the
+PD ``K_P (x_ref − x) + K_D (ẋ_ref − ẋ)`` and ``delay`` periods between command and
+torque. The closed loop is a linear map of the state over one period. Its oscillatory modes
 (the hand's spring against the virtual inertia) are what an operator feels as vibration:
 each eigenvalue λ is a continuous mode ``s = ln(λ) / dt`` with damping ratio
 ``ζ = −Re(s) / |s|``; ζ < 0 is an oscillation that grows. One eigenvalue is exactly 1 for
@@ -55,12 +57,16 @@ class JointLoop:
         damping: Hand damping seen at the joint [Nm s/rad].
         observer_gains: Stationary Kalman gains (K_p [–], K_τ [1/s]), and K_ṙ [1/s²] for
             the ``"smooth_rate"`` observer (which also estimates the torque's rate).
+        hand_inertia: The hand's own mass seen at the joint [kg m²]: it moves with the arm,
+            and the controller's model does not know it (the observer reads its inertial
+            force as the operator's).
     """
 
     inertia: float
     stiffness: float
     damping: float
     observer_gains: tuple[float, ...]
+    hand_inertia: float = 0.0
 
 
 def loop_matrix(
@@ -74,9 +80,11 @@ def loop_matrix(
     reference is unwound every period (as if the joint always lagged) unless
     ``unwind_time`` is None.
     """
-    m, p = joint.inertia, parameters
-    arm = expm(np.block([[np.array([[0.0, 1.0], [-joint.stiffness / m, -joint.damping / m]]),
-                          np.array([[0.0], [1.0 / m]])], [np.zeros((1, 3))]]) * dt)  # fmt: skip
+    m, p = joint.inertia, parameters  # the model's inertia: the controller's gains use it
+    moved = m + joint.hand_inertia  # what the torques move: the arm and the hand's mass
+    spring = np.array([[0.0, 1.0], [-joint.stiffness / moved, -joint.damping / moved]])
+    arm = expm(np.block([[spring, np.array([[0.0], [1.0 / moved]])],
+                         [np.zeros((1, 3))]]) * dt)  # fmt: skip
     virtual_mass = p.inertia_scale * m
     virtual_damping = m / p.damping_time
     kp, kd = m * (2.0 * np.pi * p.position_bandwidth) ** 2, m / p.velocity_time
@@ -126,8 +134,12 @@ def joint_loops(
     hand_damping: float,
     dt: float,
     q: FloatArray | None = None,
+    hand_mass: float = 0.0,
 ) -> list[JointLoop]:
-    """Every joint of ``robot`` at ``q`` (default home) held by the hand, one loop each."""
+    """Every joint of ``robot`` at ``q`` (default home) held by the hand, one loop each.
+
+    ``hand_mass`` [kg]: the operator's hand and forearm moving with the tool.
+    """
     dynamics = Dynamics(robot)
     q = robot.home() if q is None else q
     inertia = np.diag(dynamics.mass(q))
@@ -138,7 +150,8 @@ def joint_loops(
     for i in range(robot.n_joints):
         gains = sliding_gains(observer, float(friction_std[i]), dt)
         hand = (hand_stiffness * lever2[i], hand_damping * lever2[i])
-        loops.append(JointLoop(float(inertia[i]), *hand, tuple(float(g) for g in gains)))
+        loops.append(JointLoop(float(inertia[i]), *hand, tuple(float(g) for g in gains),
+                               hand_mass * float(lever2[i])))  # fmt: skip
     return loops
 
 
@@ -149,15 +162,20 @@ def worst_damping(
     hand_damping: float,
     dt: float = 0.004,
     delay: int = 1,
+    hand_mass: float = 0.0,
 ) -> float:
     """Smallest damping ratio over the joints of ``robot`` at home [–] (< 0: unstable).
+
+    ``hand_mass`` [kg]: the operator's hand and forearm moving with the tool
+    (:func:`joint_loops`).
 
     The unwinding of a lagging joint's reference (``unwind_time``) acts only while the
     joint lags, part of each cycle; a linear loop cannot switch, so it is taken both
     always on and always off, and the smaller ζ counts. (On the YuMi with a firm hand it
     costs the defaults' loop ζ, 0.32 → 0.19, and helps a light admittance's.)
     """
-    loops = joint_loops(robot, parameters, hand_stiffness, hand_damping, dt)
+    loops = joint_loops(robot, parameters, hand_stiffness, hand_damping, dt,
+                        hand_mass=hand_mass)  # fmt: skip
     variants = [parameters]
     if parameters.unwind_time is not None:
         variants.append(dataclasses.replace(parameters, unwind_time=None))
