@@ -240,7 +240,7 @@ def test_touching_the_arm_during_calibration_refuses_it_and_never_faults(yumi):
 
 
 #: Offsets of the torque measurement, ±0.2 Nm per joint: the twin's drive applies what it
-#: is commanded, but measures it this far off (a current sensor's zero).
+#: is commanded, but measures it this far off (a torque sensor's zero).
 OFFSETS = (0.2, -0.2, 0.2, -0.2, 0.2, -0.2, 0.2)
 
 

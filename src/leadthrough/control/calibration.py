@@ -33,8 +33,9 @@ model's level, and its gravity, read from the readings it has, counts as not kno
 whole ``G`` uncertain, as without a calibration).
 
 The readings come from the *measured* motor torque, the feed-forward acts through the
-*commanded* one. Where the two differ by an offset of the measurement (a current sensor's
-zero, which the arm never feels), the readings carry it as if gravity were off by it,
+*commanded* one. Where the two differ by an offset of the measurement (a joint torque
+sensor's zero, a current read outside the loop that drives the motor: an error the arm
+never feels), the readings carry it as if gravity were off by it,
 and a gravity correction taken from them would command it onto the arm. So the
 calibration also averages ``τ_measured − τ_commanded`` over its run (the operator's push
 does not enter it; the motion's back and forth averages out most of the drive's ripple,
