@@ -69,6 +69,13 @@ def test_a_joint_faster_than_max_speed_stops_the_calibration():
     result = run.result()
     assert not result.accepted and f"joint 5 moved at {fast[4]:.3f} rad/s" in result.reason
     assert "\n" not in result.reason and result.payload == 0.0
+    # none of the friction that ran it away is sure: error 1 on that joint, the rest as given
+    nominal = lt.FrictionModel.from_robot(robot)
+    expected = np.where(np.arange(7) == 4, 1.0, nominal.relative_error)
+    np.testing.assert_array_equal(result.friction(nominal).relative_error, expected)
+    assert result.summary().endswith("its friction not trusted; guiding with the model, its "
+                                     "friction error at least what the levels read below it "
+                                     "show (joint 5 0.00×)")  # fmt: skip
 
 
 def test_a_payload_that_shows_in_no_joint_is_zero_not_nan():

@@ -120,6 +120,26 @@ def _calibration_of_the_time(monkeypatch):
     monkeypatch.setattr(calibration.CalibrationRun, "payload", _plain_payload_fit)
 
 
+#: Dry #1 of a family whose levels are 0.5–1.5 of the model's: under the calibration's own
+#: feed-forward its wrist (0.52× the model's level) jumps at 2.01 rad/s and stops the run.
+RAN_AWAY = Case("dry", 1, "relaxed", "upwards", PlantRanges(friction_scale=(0.5, 1.5)))
+
+
+@pytest.mark.parametrize("trusted", [False, True], ids=["not trusted", "model's error"])
+def test_a_joint_the_calibration_ran_too_fast_keeps_none_of_its_friction(trusted, monkeypatch):
+    """Refused by the speed check, the fast joint's friction error is 1, and the arm stops.
+
+    With the model's level and error (as before), the compensation and the estimate trust a
+    level twice the wrist's: the released arm ran on 1.25 rad in active mode.
+    """
+    if trusted:
+        monkeypatch.setattr(calibration.Calibration, "lowered",
+                            lambda self: np.ones_like(self.friction_scale))  # fmt: skip
+    result = run_case(RAN_AWAY, "active")
+    assert not result.calibrated
+    _runs_on_or_stops(result, trusted, beyond=0.1)
+
+
 @pytest.mark.parametrize("case", [FAR_FROM_THE_POSE, OFF_AT_THE_POSE], ids=str)
 def test_released_passive_arm_stops_and_stays(case):
     """The defaults: the passive arm let go at speed stops within 0.5 s, then stays."""

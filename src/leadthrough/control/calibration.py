@@ -276,7 +276,12 @@ class Calibration:
         released arm on: the estimate reads it as a push along the motion and the
         compensation pushes with it, while one it understates only makes guiding heavier.
         So a level read at ``r`` < 1 times the model's widens that joint's relative
-        error to at least ``1 − r``: more friction margin, never less.
+        error to at least ``1 − r``: more friction margin, never less. A joint that ran
+        faster than ``max_speed`` under the calibration's own feed-forward (the model's
+        friction among it) counts as read at 0: none of its model's level is sure (error 1:
+        no compensation, the whole level as margin). On dry #1 of a family whose levels are
+        0.5–1.5 of the model's (its wrist 0.52×), the wrist jumped at 2.01 rad/s; guided
+        with the model's level and error, the released arm ran 1.25 rad (passive 3.1 rad).
         """
         if self.measured is None:
             return np.ones_like(self.friction_scale)
@@ -399,6 +404,7 @@ class CalibrationRun:
         self._error_integral = np.zeros_like(self.pose)
         self._last_t = 0.0
         self.disturbance: str | None = None  # why the calibration must stop, if it must
+        self.too_fast: int | None = None  # the joint that ran faster than max_speed, if one
         self._plus: list[FloatArray] = []
         self._minus: list[FloatArray] = []
         # samples in which the motion drove each joint up / down at pace
@@ -437,10 +443,10 @@ class CalibrationRun:
         p = self.parameters
         speed, error = np.abs(qd), np.abs(q_ref - q)
         if np.max(speed) > p.max_speed:
-            joint = int(np.argmax(speed))
+            joint = self.too_fast = int(np.argmax(speed))
             self.disturbance = (f"joint {joint + 1} moved at {speed[joint]:.3f} rad/s, faster "
                                 f"than the calibration's {p.max_speed:g} rad/s: stopped, "
-                                "arm held")  # fmt: skip
+                                "arm held, its friction not trusted")  # fmt: skip
         elif np.max(error) > _DISTURBED * p.stroke:
             joint = int(np.argmax(error))
             self.disturbance = (f"joint {joint + 1} was {1e3 * error[joint]:.0f} mrad off the "
@@ -474,6 +480,9 @@ class CalibrationRun:
     def result(self) -> Calibration:
         """The model error measured (refused with a reason when implausible)."""
         p = self.parameters
+        if self.too_fast is not None:  # none of the friction that ran it away is sure
+            untrusted = np.arange(self.pose.shape[0]) == self.too_fast
+            return self._refused(self.disturbance or "", np.where(untrusted, 0.0, 1.0), untrusted)
         if self.disturbance is not None:
             return self._refused(self.disturbance)
         offset = self.torque_offset()
