@@ -35,8 +35,8 @@ whole ``G`` uncertain, as without a calibration).
 The readings come from the *measured* motor torque, the feed-forward acts through the
 *commanded* one. Where the two differ by an offset of the measurement (a joint torque
 sensor's zero, a current read outside the loop that drives the motor: an error the arm
-never feels), the readings carry it as if gravity were off by it,
-and a gravity correction taken from them would command it onto the arm. So the
+never feels), the readings carry it as if gravity were off by it, and a gravity
+correction taken from them would command it onto the arm. So the
 calibration also averages ``τ_measured − τ_commanded`` over its run (the operator's push
 does not enter it; the motion's back and forth averages out most of the drive's ripple,
 whose rest, up to 0.014 Nm on the realistic twin's shoulder, joins the gravity error): that
@@ -480,11 +480,12 @@ class CalibrationRun:
     def result(self) -> Calibration:
         """The model error measured (refused with a reason when implausible)."""
         p = self.parameters
-        if self.too_fast is not None:  # none of the friction that ran it away is sure
-            untrusted = np.arange(self.pose.shape[0]) == self.too_fast
-            return self._refused(self.disturbance or "", np.where(untrusted, 0.0, 1.0), untrusted)
         if self.disturbance is not None:
-            return self._refused(self.disturbance)
+            if self.too_fast is None:
+                return self._refused(self.disturbance)
+            # none of the friction that ran a joint away is sure: read at 0 (lowered)
+            untrusted = np.arange(self.pose.shape[0]) == self.too_fast
+            return self._refused(self.disturbance, np.where(untrusted, 0.0, 1.0), untrusted)
         offset = self.torque_offset()
         if offset is not None:
             limit = p.max_torque_offset * self.dynamics.robot.torque_limits
