@@ -308,12 +308,19 @@ def no_credit_at_rest_uncalibrated(robot: lt.RobotDescription, mode: str) -> lt.
     return _build(robot, mode, cls=_NoCreditAtRest, calibrate=False)
 
 
-def follow_push(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
-    """Active mode's compensation below the velocity ramp follows the push it reads."""
-    return _build(robot, mode, compensation=CoulombCompensationParameters(follow_push=True))
+def thesis_compensation(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """Active mode's compensation never follows the push: the thesis' law.
+
+    The default before it followed the push once a start-up calibration is accepted.
+    """
+    return _build(robot, mode,
+                  compensation=CoulombCompensationParameters(follow_push="never"))  # fmt: skip
 
 
 def follow_push_uncalibrated(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
-    """:func:`follow_push` without the start-up calibration (run with ``--uncalibrated``)."""
+    """Active mode's compensation follows the push without the start-up calibration.
+
+    Run with ``--uncalibrated``; the default there is the thesis' law.
+    """
     return _build(robot, mode, calibrate=False,
-                  compensation=CoulombCompensationParameters(follow_push=True))  # fmt: skip
+                  compensation=CoulombCompensationParameters(follow_push="always"))  # fmt: skip

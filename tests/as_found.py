@@ -5,6 +5,7 @@ import dataclasses
 from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.calibration import CalibrationParameters, CalibrationRun
 from leadthrough.control.dither import DitherParameters
+from leadthrough.friction.compensation import CoulombCompensationParameters
 
 #: Before: 5 mrad at 0.05 rad/s, inside the plants' Stribeck range, a level refused
 #: outside 1 / 1.75–1.75× the model's, and a level read known to ``friction_accuracy``
@@ -67,3 +68,13 @@ def unread_torque_offset(monkeypatch) -> None:
     cases found then.
     """
     monkeypatch.setattr(CalibrationRun, "torque_offset", lambda run: None)
+
+
+def thesis_compensation(monkeypatch) -> None:
+    """Every compensation keeps the thesis' law in active mode too, as before ``follow_push``.
+
+    Following the push a calibrated arm's admittance reads, a joint slowed below the
+    compensation's ramp keeps its compensation: the coasts and runs some of these cases
+    showed then go on longer, for a reason of its own.
+    """
+    _built_as(monkeypatch, CoulombCompensationParameters(follow_push="never"))

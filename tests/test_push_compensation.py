@@ -1,8 +1,9 @@
 """Coulomb compensation below the velocity ramp follows the push the active law reads.
 
-The rule (``friction/compensation.py``, an option: ``follow_push``): ``τ_fc = (r(q̇) sign(q̇)
-+ (1 − r(q̇)) p) ε τ_C`` with ``p`` the law's signed weight (``ActiveLaw.signed_weight``),
-averaged over ``push_time``; ``p = 0``, passive mode and the default are the thesis' law.
+The rule (``friction/compensation.py``, ``follow_push``): ``τ_fc = (r(q̇) sign(q̇) + (1 − r(q̇))
+p) ε τ_C`` with ``p`` the law's signed weight (``ActiveLaw.signed_weight``), averaged over
+``push_time``; ``p = 0`` and passive mode are the thesis' law, and so is active mode by
+default until a start-up calibration has been accepted.
 """
 
 from __future__ import annotations
@@ -23,6 +24,10 @@ from leadthrough.friction.compensation import (
     coulomb_compensation,
 )
 from leadthrough.friction.model import FrictionModel
+from leadthrough.twin.operator import Hand
+from leadthrough.twin.paths import MinimumJerk
+from leadthrough.twin.runner import simulate
+from leadthrough.twin.simulator import DigitalTwin
 
 N = 7
 FRACTION, DEAD_BAND, FULL_VELOCITY = 0.7, 0.003, 0.01
@@ -119,9 +124,8 @@ def test_the_signed_weight_is_the_push_weighed_signed_and_averaged():
     assert np.all(np.abs(law.signed_weight) <= 1.0)
 
 
-def test_only_active_mode_with_follow_push_hands_the_compensation_a_push(monkeypatch):
-    """The law's signed weight reaches the feed-forward in active mode with ``follow_push``."""
-    robot = lt.robots.yumi()
+def _pushes_seen(monkeypatch, controller, steps=50):
+    """The push the feed-forward got on the last of ``steps`` samples of a push on joint 1."""
     seen = {}
     original = PassiveFeedForward.step
 
@@ -130,45 +134,76 @@ def test_only_active_mode_with_follow_push_hands_the_compensation_a_push(monkeyp
         return original(self, q, qd, model, t, gravity_reference, push)
 
     monkeypatch.setattr(PassiveFeedForward, "step", spy)
-    dynamics = lt.Dynamics(robot)
+    robot = controller.robot
     q = robot.home()
-    tau = dynamics.gravity(q) + np.array([2.0, 0, 0, 0, 0, 0, 0])  # a push on joint 1
-    following = lt.LeadThroughParameters(compensation=CoulombCompensationParameters(
-        follow_push=True))  # fmt: skip
-    for mode, parameters in (("passive", following), ("active", None), ("active", following)):
-        controller = lt.LeadThrough(robot, mode=mode, dt=0.004, parameters=parameters)
-        for _ in range(50):
-            controller.step(q, np.zeros(N), tau)
-        if mode == "passive" or parameters is None:  # passive, and the default: the thesis
-            assert seen["push"] is None
+    tau = lt.Dynamics(robot).gravity(q) + np.array([2.0, 0, 0, 0, 0, 0, 0])
+    for _ in range(steps):
+        controller.step(q, np.zeros(N), tau)
+    return seen["push"]
+
+
+def _following(setting):
+    return lt.LeadThroughParameters(compensation=CoulombCompensationParameters(
+        follow_push=setting))  # fmt: skip
+
+
+def test_only_active_mode_hands_the_compensation_a_push_when_asked(monkeypatch):
+    """The law's signed weight reaches the feed-forward in active mode only, when asked."""
+    robot = lt.robots.yumi()
+    for mode, setting in (("passive", "always"), ("active", "never"), ("active", "calibrated"),
+                          ("active", "always")):  # fmt: skip
+        controller = lt.LeadThrough(robot, mode=mode, dt=0.004, parameters=_following(setting))
+        push = _pushes_seen(monkeypatch, controller)
+        if mode == "passive" or setting != "always":  # without a calibration: the thesis
+            assert push is None and not controller.follows_push
         else:
+            assert controller.follows_push
             assert np.abs(controller.law.signed_weight[0]) > 0.1  # it reads the push
-            np.testing.assert_array_equal(seen["push"], controller.law.signed_weight)
+            np.testing.assert_array_equal(push, controller.law.signed_weight)
 
 
-def test_follow_push_is_an_option_off_by_default_and_loads_from_toml(tmp_path):
-    """``[compensation] follow_push = true`` turns it on; off by default; non-booleans fail."""
+def test_by_default_it_follows_the_push_once_a_calibration_is_accepted(monkeypatch):
+    """Calibrated on a twin nobody touches: the default follows; a touched arm's does not."""
+    robot = lt.robots.yumi()
+    accepted = lt.LeadThrough(robot, mode="active", calibrate=True)
+    assert not accepted.follows_push  # before the calibration
+    simulate(DigitalTwin(robot), accepted, accepted.calibration_time + 0.1)
+    assert accepted.calibration.accepted and accepted.follows_push
+    np.testing.assert_array_equal(_pushes_seen(monkeypatch, accepted),
+                                  accepted.law.signed_weight)  # fmt: skip
+    start = lt.Dynamics(robot).pose(robot.home())[:3, 3]
+    hand = Hand(MinimumJerk(start, start + np.array([0.0, 0.1, 0.0]), duration=0.5))
+    refused = lt.LeadThrough(robot, mode="active", calibrate=True)
+    simulate(DigitalTwin(robot, operator=hand), refused, refused.calibration_time + 0.1)
+    assert not refused.calibration.accepted and not refused.follows_push
+
+
+def test_follow_push_settings_and_toml(tmp_path):
+    """``"calibrated"`` by default; ``true`` / ``false`` in TOML are always / never."""
+    assert lt.LeadThroughParameters().compensation.follow_push == "calibrated"
     path = tmp_path / "p.toml"
-    path.write_text("[compensation]\nfollow_push = true\n", encoding="utf-8")
-    assert lt.LeadThroughParameters.from_toml(path).compensation.follow_push is True
-    assert lt.LeadThroughParameters().compensation.follow_push is False
-    with pytest.raises(ParameterError, match="follow_push"):
-        CoulombCompensationParameters(follow_push=1)  # type: ignore[arg-type]
+    for text, setting in (("true", "always"), ("false", "never"), ('"calibrated"', "calibrated")):
+        path.write_text(f"[compensation]\nfollow_push = {text}\n", encoding="utf-8")
+        assert lt.LeadThroughParameters.from_toml(path).compensation.follow_push == setting
+    for wrong in (1, "sometimes", None):
+        with pytest.raises(ParameterError, match="follow_push"):
+            CoulombCompensationParameters(follow_push=wrong)  # type: ignore[arg-type]
 
 
-def test_off_by_default_because_a_misread_resting_joint_would_slide():
+def test_off_without_a_calibration_because_a_misread_resting_joint_would_slide():
     """What the default prevents: a resting joint whose push the law misreads slides.
 
     Without a start-up calibration (the constructor's default: the friction levels the
     model's ±20 %, no offset of the torque measurement read), on dry #1's relaxed circle
-    the option shakes the tool about 1.5× as much as passive mode, the thesis' law about
-    as much (0.96×). With a calibration the same plant's misreadings of the previous
-    release (its resting wrist, pulled upwards by a stiff hand, with levels 0.7–1.3 of the
-    model's: 2.1×) came from the measurement's offset, which the calibration now reads.
+    following the push always shakes the tool about 1.5× as much as passive mode, the
+    default (the thesis' law there) about as much (0.96×). With a calibration the same
+    plant's misreadings of an earlier release (its resting wrist, pulled upwards by a
+    stiff hand, with levels 0.7–1.3 of the model's: 2.1×) came from the measurement's
+    offset, which the calibration now reads.
     """
     case = Case("dry", 1, "relaxed", "circle")
 
-    def uncalibrated(robot, mode, follow_push=False):
+    def uncalibrated(robot, mode, follow_push="calibrated"):
         parameters = lt.LeadThroughParameters(
             compensation=CoulombCompensationParameters(follow_push=follow_push)
         )
@@ -176,6 +211,6 @@ def test_off_by_default_because_a_misread_resting_joint_would_slide():
 
     passive = run_case(case, "passive", uncalibrated).vibration
     default = run_case(case, "active", uncalibrated).vibration
-    following = run_case(case, "active", functools.partial(uncalibrated, follow_push=True))
+    following = run_case(case, "active", functools.partial(uncalibrated, follow_push="always"))
     assert default < 1.5 * passive
     assert following.vibration > 1.3 * default

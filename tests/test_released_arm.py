@@ -24,6 +24,7 @@ from as_found import (
     friction_margin_share,
     own_rest_bands,
     slow_calibration_motion,
+    thesis_compensation,
     two_second_park,
     unread_torque_offset,
 )
@@ -243,11 +244,13 @@ def test_damping_on_the_operator_weight_lets_the_released_arm_coast(monkeypatch)
     that stops the coasting arm too (its references relax to the joints friction slows);
     with the dither parked after 2 s, as then: parked after 0.5 s it ends the coast; and
     with the levels read known to the calibration's 20 % everywhere, as then: known to
-    their readings near the pose, it stops after 0.52 s and 0.6 mrad (0.57 s, 1.4 mrad).
+    their readings near the pose, it stops after 0.52 s and 0.6 mrad (0.57 s, 1.4 mrad);
+    and with the thesis' compensation, as then.
     """
     two_second_park(monkeypatch)
     constant_level_error(monkeypatch)
     unread_torque_offset(monkeypatch)
+    thesis_compensation(monkeypatch)
 
     def factory(robot, mode):
         parameters = lt.LeadThroughParameters(unwind_time=None)
@@ -375,11 +378,13 @@ def test_a_joint_running_ahead_of_its_references_is_braked_not_followed(cls, run
     damping, the one thing that brakes a joint the law reads no push on, went with it.
     The feed-forward error that drives the joint here is the calibration's reading of its
     jumps (counted again for this test; see the next one), and the references are not
-    unwound and each joint's Coulomb band is its own (as when the case was found).
+    unwound, each joint's Coulomb band is its own and the compensation the thesis' (as when
+    the case was found).
     """
     monkeypatch.setattr(calibration, "_JUMPING", np.inf)
     _calibration_of_the_time(monkeypatch)
     own_rest_bands(monkeypatch)
+    thesis_compensation(monkeypatch)
 
     def factory(robot, mode):
         parameters = lt.LeadThroughParameters(unwind_time=None)

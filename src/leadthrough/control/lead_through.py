@@ -18,9 +18,10 @@ One step, in order, on the robot's sample (its time stamp is the one clock):
    tracked by a PD whose gains follow M(q) (thesis eqs. 6.4–6.6; the same
    :class:`~leadthrough.control.active_law.ActiveLaw`);
 5. feed-forward ``τ_ff = G(q) + τ_fc(q̇) + dither`` (thesis eq. 6.3, §5.3), the Coulomb
-   compensation below the friction surely there minus the gravity error that may be (as
-   an option in active mode, ``follow_push``, a joint below the compensation's velocity
-   ramp is compensated as surely, and in the direction, as the admittance reads a push);
+   compensation below the friction surely there minus the gravity error that may be (in
+   active mode once a start-up calibration has been accepted, ``follow_push``, a joint
+   below the compensation's velocity ramp is compensated as surely, and in the direction,
+   as the admittance reads a push);
 6. the supervisor limits the command (torque, joint and TCP speed, soft walls).
 
 An exception in any of these latches the supervisor's fault naming the exception and
@@ -519,11 +520,24 @@ class LeadThrough:
             return (torque + constraint if self.constraints else torque), feed_forward.dither
         self._stage = "admittance"
         tracking = self.law.tracking(q, qd, constraint, model.mass)
-        # follow_push (an option): a joint below its compensation's velocity ramp is
-        # compensated as surely, and in the direction, as the admittance reads a push on it
-        push = self.law.signed_weight if self.parameters.compensation.follow_push else None
+        # follow_push: a joint below its compensation's velocity ramp is compensated as
+        # surely, and in the direction, as the admittance reads a push on it
+        push = self.law.signed_weight if self.follows_push else None
         feed_forward = self._feed_forward(t, model, push)
         return feed_forward.total + tracking, feed_forward.dither
+
+    @property
+    def follows_push(self) -> bool:
+        """Whether active mode's compensation follows the push the admittance reads.
+
+        ``CoulombCompensationParameters.follow_push``: ``"always"``, ``"never"``, or
+        (the default) ``"calibrated"``, once a start-up calibration has been accepted.
+        """
+        setting = self.parameters.compensation.follow_push
+        calibrated = self.calibration is not None and self.calibration.accepted
+        return self.mode == "active" and (
+            setting == "always" or (setting == "calibrated" and calibrated)
+        )
 
     def _feed_forward(
         self, t: float, model: ModelSnapshot, push: FloatArray | None

@@ -19,9 +19,11 @@ the compensation follows that push instead of falling to zero::
 so a joint the operator pushes keeps its compensation when it slows or sticks in the
 middle of the push (no ε τ_C that flickers on and off with a velocity near q̇₀), and a
 joint at rest under a push it believes starts with it. ``p = 0`` (passive mode, nobody
-pushing) is the thesis' law, and so is the default: the rule is an option
-(``CoulombCompensationParameters.follow_push``), since a resting joint whose push the law
-misreads then slides.
+pushing) is the thesis' law. A resting joint whose push the law misreads then slides, and
+the law misreads most where the model's error was never measured: by default
+(``CoulombCompensationParameters.follow_push = "calibrated"``) the compensation follows the
+push only once a start-up calibration has been accepted, and keeps the thesis' law
+otherwise.
 
 ε < 1 keeps the released arm stopping only if nothing else pushes it. A gravity model
 that is off by ΔG pushes too, so the compensated level may also be capped per joint by
@@ -43,6 +45,9 @@ from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray
 from leadthrough.validation import real
 
+#: When active mode's compensation follows the push (:class:`CoulombCompensationParameters`).
+FOLLOW_PUSH = ("never", "calibrated", "always")
+
 
 @dataclass(frozen=True)
 class CoulombCompensationParameters:
@@ -53,28 +58,33 @@ class CoulombCompensationParameters:
         dead_band: q̇₀, no compensation below it [rad/s] (thesis: 0.003, above the noise).
         full_velocity: q̇₁, full compensation above it [rad/s] (not given in the thesis;
             0.01 rad/s, a few times q̇₀, ramps in over a fraction of a degree per second).
-        follow_push: Active lead-through only: below the ramp the compensation follows
-            how surely, and which way, the admittance reads a push on the joint (module
-            docstring). Off by default: on the plant family it lightens guiding a little
-            and smooths it in the median, but a resting joint the law misreads then slides
-            (a wrist on plants whose levels are 0.7-1.3 of the model's: 2.1x passive
-            vibration; README). False: the thesis' law in both modes.
+        follow_push: Active lead-through only: when, below the ramp, the compensation
+            follows how surely and which way the admittance reads a push on the joint
+            (module docstring): ``"calibrated"`` once a start-up calibration has been
+            accepted (the default), ``"always"`` (``true`` in TOML), or ``"never"``
+            (``false``: the thesis' law in both modes). Calibrated, it lightens guiding a
+            little and shakes less in the worst cases; without a calibration a resting
+            joint the law misreads slides (dry #1's relaxed circle: 1.5× passive's
+            vibration against 0.96× with the thesis' law; README).
     """
 
     fraction: float = 0.7
     dead_band: float = 0.003
     full_velocity: float = 0.01
-    follow_push: bool = False
+    follow_push: str = "calibrated"
 
     def __post_init__(self) -> None:
+        if isinstance(self.follow_push, bool):  # TOML's true / false
+            object.__setattr__(self, "follow_push", "always" if self.follow_push else "never")
+        if self.follow_push not in FOLLOW_PUSH:
+            raise ParameterError("follow_push", f"must be one of {', '.join(FOLLOW_PUSH)} (or "
+                                 f"true / false), got {self.follow_push!r}")  # fmt: skip
         real("fraction", self.fraction, minimum=0.0, error=ParameterError)
         if self.fraction > 1.0:
             raise ParameterError("fraction", f"must be ≤ 1, got {self.fraction:g}")
         real("dead_band", self.dead_band, minimum=0.0, error=ParameterError)
         if real("full_velocity", self.full_velocity, error=ParameterError) <= self.dead_band:
             raise ParameterError("full_velocity", "must be above dead_band")
-        if not isinstance(self.follow_push, bool):
-            raise ParameterError("follow_push", f"must be true or false, got {self.follow_push!r}")
 
 
 def coulomb_compensation(
