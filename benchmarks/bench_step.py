@@ -6,8 +6,9 @@ are timed at the same state: G(q), M(q), Cᵀ(q, q̇) q̇ and the TCP Jacobian (
 ``Dynamics`` methods). Interleaving them makes the ratio step / model robust to the
 machine's load, and so does the p99 of the step's CPU time (this process's, without
 the time other processes took; the wall-clock p99 is what a loop would have met).
-Passive, active (calibrate=False, the description's friction) and active with two
-virtual constraints.
+Passive, active (calibrate=False, the description's friction), active with two
+virtual constraints, and active with the compensation following the push (the path of an
+arm whose start-up calibration was accepted, ``follow_push``).
 
 Usage:
     python benchmarks/bench_step.py [--calls N] [--save FILE] [--compare FILE]
@@ -21,10 +22,15 @@ import numpy as np
 
 import leadthrough as lt
 from leadthrough.control.constraints import Box, Plane
+from leadthrough.friction.compensation import CoulombCompensationParameters
 from leadthrough.logs.sample import JointState
 from leadthrough.safety.supervisor import SupervisorState
 from timing import parser, report
 
+#: The compensation following the push, as it does once a start-up calibration is accepted.
+FOLLOWING = lt.LeadThroughParameters(
+    compensation=CoulombCompensationParameters(follow_push="always")
+)
 CONSTRAINTS = (Plane(point=(0.3, 0.0, 0.0), normal=(0.0, 0.0, 1.0)),
                Box(lower=(-1.0, -1.0, -1.0), upper=(1.0, 1.0, 1.0)))  # fmt: skip
 
@@ -69,6 +75,8 @@ def main() -> None:
         "step, passive": lt.LeadThrough(robot, "passive"),
         "step, active": lt.LeadThrough(robot, "active"),
         "step, active, 2 constraints": lt.LeadThrough(robot, "active", constraints=CONSTRAINTS),
+        # a calibrated arm's path: the compensation follows the push (follow_push)
+        "step, active, following the push": lt.LeadThrough(robot, "active", parameters=FOLLOWING),
     }
     results = {name: timed(controller, args.calls) for name, controller in controllers.items()}
     print(f"{robot.name}, {args.calls} steps each at varying poses, one thread")
