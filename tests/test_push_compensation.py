@@ -124,14 +124,18 @@ def test_the_signed_weight_is_the_push_weighed_signed_and_averaged():
     assert np.all(np.abs(law.signed_weight) <= 1.0)
 
 
+#: The feed-forward's own step, which the spy of :func:`_pushes_seen` calls (however often
+#: it is installed).
+_FEED_FORWARD_STEP = PassiveFeedForward.step
+
+
 def _pushes_seen(monkeypatch, controller, steps=50):
     """The push the feed-forward got on the last of ``steps`` samples of a push on joint 1."""
     seen = {}
-    original = PassiveFeedForward.step
 
     def spy(self, q, qd, model=None, t=None, gravity_reference=None, push=None):
         seen["push"] = None if push is None else np.array(push)
-        return original(self, q, qd, model, t, gravity_reference, push)
+        return _FEED_FORWARD_STEP(self, q, qd, model, t, gravity_reference, push)
 
     monkeypatch.setattr(PassiveFeedForward, "step", spy)
     robot = controller.robot
@@ -145,6 +149,12 @@ def _pushes_seen(monkeypatch, controller, steps=50):
 def _following(setting):
     return lt.LeadThroughParameters(compensation=CoulombCompensationParameters(
         follow_push=setting))  # fmt: skip
+
+
+def _guiding(robot, mode, follow_push="calibrated", calibrate=False):
+    """A benchmark case's controller with ``follow_push`` (``run_case``'s factory)."""
+    return lt.LeadThrough(robot, mode=mode, dt=0.004, parameters=_following(follow_push),
+                          calibrate=calibrate)  # fmt: skip
 
 
 def test_only_active_mode_hands_the_compensation_a_push_when_asked(monkeypatch):
@@ -202,16 +212,9 @@ def test_off_without_a_calibration_because_a_misread_resting_joint_would_slide()
     offset, which the calibration now reads.
     """
     case = Case("dry", 1, "relaxed", "circle")
-
-    def uncalibrated(robot, mode, follow_push="calibrated"):
-        parameters = lt.LeadThroughParameters(
-            compensation=CoulombCompensationParameters(follow_push=follow_push)
-        )
-        return lt.LeadThrough(robot, mode=mode, dt=0.004, parameters=parameters)
-
-    passive = run_case(case, "passive", uncalibrated).vibration
-    default = run_case(case, "active", uncalibrated).vibration
-    following = run_case(case, "active", functools.partial(uncalibrated, follow_push="always"))
+    passive = run_case(case, "passive", _guiding).vibration
+    default = run_case(case, "active", _guiding).vibration
+    following = run_case(case, "active", functools.partial(_guiding, follow_push="always"))
     assert default < 1.5 * passive
     assert following.vibration > 1.3 * default
 
@@ -224,13 +227,7 @@ def test_on_a_calibrated_arm_following_the_push_shakes_less_than_the_thesis_law(
     more than 0.05; 151 shake more).
     """
     case = Case("lugre", 3, "relaxed", "sideways")
-
-    def calibrated(robot, mode, follow_push="calibrated"):
-        parameters = lt.LeadThroughParameters(
-            compensation=CoulombCompensationParameters(follow_push=follow_push)
-        )
-        return lt.LeadThrough(robot, mode=mode, dt=0.004, parameters=parameters, calibrate=True)
-
+    calibrated = functools.partial(_guiding, calibrate=True)
     passive = run_case(case, "passive", calibrated).vibration
     default = run_case(case, "active", calibrated)
     thesis = run_case(case, "active", functools.partial(calibrated, follow_push="never"))
