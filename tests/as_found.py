@@ -2,9 +2,13 @@
 
 import dataclasses
 
+import numpy as np
+
+from leadthrough.control import calibration
 from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.calibration import CalibrationParameters, CalibrationRun
 from leadthrough.control.dither import DitherParameters
+from leadthrough.control.lead_through import LeadThrough
 from leadthrough.friction.compensation import CoulombCompensationParameters
 
 #: Before: 5 mrad at 0.05 rad/s, inside the plants' Stribeck range, a level refused
@@ -78,3 +82,40 @@ def thesis_compensation(monkeypatch) -> None:
     showed then go on longer, for a reason of its own.
     """
     _built_as(monkeypatch, CoulombCompensationParameters(follow_push="never"))
+
+
+def observer_readings(monkeypatch) -> None:
+    """Every calibration reads the observer at each sample at pace, as before the momentum balance.
+
+    The readings of the time: the Kalman observer's estimate, fed the robot's filtered
+    velocity (15–40 Hz, with its lag), taken at each sample whose *filtered* velocity was
+    between a quarter and twice the motion's speed. The inertial torque of the motion
+    and of the tracking's ringing passed into those readings (up to ±2 Nm on a Panda).
+    The run keeps, next to each sample it records, that velocity and estimate.
+    """
+    calibrate, record = LeadThrough._calibrate, CalibrationRun.record
+    current = {}  # the controller calibrating and the velocity of its sample
+
+    def observed(controller, t, model, tau_measured):
+        current.update(controller=controller, velocity=model.qd.copy())
+        return calibrate(controller, t, model, tau_measured)
+
+    def recorded(run, t, q, tau, discrepancy=None):
+        samples = len(run._samples)
+        record(run, t, q, tau, discrepancy)
+        if len(run._samples) > samples:
+            estimate = current["controller"].observer.tau_ext_hat.copy()
+            run.__dict__.setdefault("observed", []).append((current["velocity"], estimate))
+
+    def readings(run):
+        observed = run.__dict__.get("observed", [])
+        t = np.array([sample[0] for sample in run._samples])
+        velocity = np.array([sample[0] for sample in observed]).reshape(len(t), -1)
+        estimate = np.array([sample[1] for sample in observed]).reshape(len(t), -1)
+        speed, pace = np.abs(velocity), run.parameters.speed
+        paced = (speed > calibration._SLIDING * pace) & (speed <= calibration._JUMPING * pace)
+        return t, velocity, np.where(paced, estimate, np.nan)
+
+    monkeypatch.setattr(LeadThrough, "_calibrate", observed)
+    monkeypatch.setattr(CalibrationRun, "record", recorded)
+    monkeypatch.setattr(CalibrationRun, "readings", readings)

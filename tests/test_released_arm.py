@@ -22,6 +22,7 @@ import leadthrough as lt
 from as_found import (
     constant_level_error,
     friction_margin_share,
+    observer_readings,
     own_rest_bands,
     slow_calibration_motion,
     thesis_compensation,
@@ -377,12 +378,13 @@ def test_a_joint_running_ahead_of_its_references_is_braked_not_followed(cls, run
     Re-anchored to the joint's velocity too, the reference took up the run and the PD's
     damping, the one thing that brakes a joint the law reads no push on, went with it.
     The feed-forward error that drives the joint here is the calibration's reading of its
-    jumps (counted again for this test; see the next one), and the references are not
-    unwound, each joint's Coulomb band is its own and the compensation the thesis' (as when
-    the case was found).
+    jumps (counted again for this test; see the next one) through the observer, as then,
+    and the references are not unwound, each joint's Coulomb band is its own and the
+    compensation the thesis' (as when the case was found).
     """
     monkeypatch.setattr(calibration, "_JUMPING", np.inf)
     _calibration_of_the_time(monkeypatch)
+    observer_readings(monkeypatch)
     own_rest_bands(monkeypatch)
     thesis_compensation(monkeypatch)
 
@@ -400,9 +402,12 @@ def test_a_calibration_that_reads_only_paced_sliding_lets_the_wrist_stop(jumps_r
 
     Read from its jumps, its gravity correction was 0.09 Nm off and the released arm ran on
     198 mrad; read only at the calibration's pace, it has too few readings, is left
-    unmeasured (its friction known to the unit spread) and the arm stops.
+    unmeasured (its friction known to the unit spread) and the arm stops. With the
+    observer's readings of the time (``as_found.observer_readings``): the momentum balance
+    the calibration reads now has no lag, and reads this wrist's jumps without the error.
     """
     _calibration_of_the_time(monkeypatch)
+    observer_readings(monkeypatch)
     if jumps_read:
         monkeypatch.setattr(calibration, "_JUMPING", np.inf)
     result = run_case(JUMPS_READ, "active")
@@ -416,10 +421,12 @@ def test_a_joint_the_calibration_read_only_a_few_times_keeps_its_level(few_read,
     Measured from them (any three readings each way, as before), its level and gravity came
     out +20 % and 0.16 Nm off, and the passive feed-forward ran the released arm on; with
     the model's level and its gravity counted as not known, the arm stops. With the
-    calibration motion of the time (the default one slides that wrist long enough).
+    calibration motion and the observer's readings of the time (the default motion slides
+    that wrist long enough; the momentum balance reads it within 5 % even from few samples).
     """
     slow_calibration_motion(monkeypatch)
     unread_torque_offset(monkeypatch)
+    observer_readings(monkeypatch)
     if few_read:
         monkeypatch.setattr(calibration, "_MEASURED", 0.0)
     result = run_case(FEW_READINGS, "passive", _passive())
@@ -444,8 +451,10 @@ def test_a_calibration_that_slides_above_the_stribeck_range_lets_the_arm_stop(sl
     """Lugre #29: the calibration's motion, 10 mrad at 0.1 rad/s, reads joint 4 sliding.
 
     At 5 mrad and 0.05 rad/s (before) the joint stuck and jumped, the readings were the
-    edges of its jumps and its level came out 16 % high: the passive arm ran on.
+    edges of its jumps and its level came out 16 % high: the passive arm ran on. With the
+    observer's readings of the time, whose lag made those edges readings.
     """
+    observer_readings(monkeypatch)
     if slow:
         slow_calibration_motion(monkeypatch)
     result = run_case(STICK_SLIP_READ, "passive", _passive())
@@ -480,8 +489,11 @@ def test_a_refused_calibration_that_read_a_level_low_still_stops_the_released_ar
     """Refused, the run's low reading of joint 1 still widens its friction error: it stops.
 
     Without (the refused calibration left no trace) the model's level, about twice the
-    plant's, reads as a push along the motion that the 0.35 margin does not cover.
+    plant's, reads as a push along the motion that the 0.35 margin does not cover. With the
+    observer's readings of the time: the momentum balance reads joint 1 at 0.64× (the
+    plant's 0.65×), inside the plausible band, and the calibration is accepted.
     """
+    observer_readings(monkeypatch)
     if not widened:
         monkeypatch.setattr(Calibration, "lowered", lambda self: np.ones(7))
     result = run_case(READ_LOW, "active")

@@ -16,6 +16,7 @@ import pytest
 
 import leadthrough as lt
 from as_found import (
+    observer_readings,
     own_rest_bands,
     slow_calibration_motion,
     two_second_park,
@@ -53,9 +54,11 @@ def test_a_joint_held_by_stiction_does_not_wind_the_admittance_up(monkeypatch):
     joint's own Coulomb band in the law: 1.15× against 1.43×. With the defaults, 1.29×
     against 1.47×. And with the dither parked after 2 s, as then (parked after 0.5 s it
     stops twitching both arms in the hold, whose 2 s count in the vibration), and no
-    offset of the torque measurement read by the calibration, as then.
+    offset of the torque measurement read by the calibration, and the calibration reading
+    the observer, as then.
     """
     slow_calibration_motion(monkeypatch)
+    observer_readings(monkeypatch)
     unread_torque_offset(monkeypatch)
     own_rest_bands(monkeypatch)
     two_second_park(monkeypatch)

@@ -4,8 +4,8 @@ At rest the momentum observer cannot tell a model error from friction (friction 
 any torque up to breakaway), so a bias learned at rest is never certain. Sliding, it
 can: friction is then known up to its level. So lead-through starts by moving every
 joint a few mrad back and forth at a slow, constant-ish speed, nobody touching. With
-``τ̂₊`` and ``τ̂₋`` the observer's readings while a joint slides in the positive and
-negative direction at the motion's pace (SPEC §5:
+``τ̂₊`` and ``τ̂₋`` the readings while a joint slides in the positive and negative
+direction at the motion's pace, the torque the model misses there (SPEC §5:
 ``τ̂_ext = τ_ext + (G − G_true) + (τ_f − τ_f,true)``)::
 
     gravity error   ΔG   = (τ̂₊ + τ̂₋) / 2      (= G_model − G_true at q₀)
@@ -20,11 +20,22 @@ lugre #29's joint 4, stuck and jumping at 3× the pace, were its filtered veloci
 through the pace band (+0.22 → +0.06 Nm rising, −0.33 Nm falling, the same direction):
 its level came out 16 % high and the released arm slid 1.5 rad, in passive mode too.
 
+A reading is the momentum balance over each stretch a joint slides at pace, taken once the
+run is over (:func:`sliding_readings`): the generalized momentum from the encoders' central
+difference, the torque the model misses as the slope of the momentum it does not explain.
+Before, the readings were the momentum observer's estimate at each sample, fed the robot's
+filtered velocity: its lag (~25 ms with the filter and the delay) turned the inertial
+torque of the motion's reversals and of the tracking's ringing into readings, which
+scattered 3–54 % of the level on the YuMi's plants (now 0–1 %), and on a Panda, whose
+levels (0.15–0.36 Nm) are small beside its inertia, read ±1–2 Nm and refused 7 of 8
+calibrations.
+
 At the motion's pace means between a quarter of its speed and twice it. A light joint
 whose stiction exceeds what the tracking builds up within the stroke sticks and then jumps,
-for a few ms, at several times that speed; the observer lags such a jump (the joint's
-momentum changes faster than its bandwidth), and reading the jumps put the gravity error of
-a wrist joint 0.09 Nm off, enough for the released arm to run 0.2 rad. A joint's Coulomb
+for a few ms, at several times that speed, through the Stribeck curve, where friction is
+above its Coulomb level; the observer lagged such a jump, and reading the jumps put the
+gravity error of a wrist joint 0.09 Nm off, enough for the released arm to run 0.2 rad
+(``tests/test_released_arm.py``, with the observer's readings of the time). A joint's Coulomb
 level is measured only if it slid at pace for at least an eighth of the time the motion
 drove it that way, each way (:data:`_MEASURED`): a handful of readings between a joint's
 jumps is a sample of its stick-slip, not of its sliding, and an overstated level is what
@@ -71,6 +82,7 @@ nobody touching. With ``M(q)`` every mode has the bandwidth ω.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import warnings
 from dataclasses import dataclass
 
@@ -228,9 +240,12 @@ class Calibration:
             torque, or the run stopped early).
         coulomb_spread: How far a Coulomb reading may be off, per joint [Nm]: half the
             robust spread (1.4826 × median absolute deviation) of the paced readings up
-            and down, combined. A joint that sticks and jumps scatters them. Against the dry
-            plants' true levels (seeds 1–8, 49 joints), every reading's error stays within
-            it, 86 % within half of it; on the realistic twin it is 0.3–0.9 % of the level.
+            and down, combined (each stretch's reading counted once per sample). A joint
+            that sticks and jumps between stretches scatters them. The momentum balance
+            scatters little: 0–1 % of the level on the dry plants of seeds 1–8, whose levels
+            it reads 0.8 % off in the median and at most 5 % (``calibration_accuracy.py``,
+            seeds 1–16; a stretch starts on the Stribeck curve, so mostly high): the
+            stiction margin's 5 %, the least error of any level, bounds them at the pose.
             None: not known (0).
     """
 
@@ -350,6 +365,63 @@ class Calibration:
                                   np.array(far, dtype=float), slope)  # fmt: skip
 
 
+def sliding_readings(
+    t: FloatArray, q: FloatArray, tau: FloatArray, dynamics: Dynamics, friction: FrictionModel,
+    pace: tuple[float, float],
+) -> tuple[FloatArray, FloatArray]:  # fmt: skip
+    """Joint velocities and, over each stretch a joint slides at pace, the torque the model misses.
+
+    The generalized momentum ``p = M(q) q̇`` obeys ``ṗ = τ − G(q) − τ_f(q̇) + Cᵀ(q, q̇) q̇ +
+    τ_miss`` (SPEC §5), where ``τ_miss`` is the operator's torque plus every model error.
+    The momentum the model leaves unexplained, ``u(t) = p(t) − ∫ (τ − G − τ_f + Cᵀq̇) dt``,
+    therefore grows at ``τ_miss``, and over a stretch ``[a, b]`` the reading is
+    ``(u_b − u_a) / (t_b − t_a)``: the momentum observer's residual, taken after the run.
+    After the run the next sample is known, so ``q̇`` is the encoders' central difference,
+    without the lag of the robot's filtered velocity (15–40 Hz on the plants of
+    ``benchmarks/guiding_quality.py``, ~25 ms with the delay): the observer, fed that
+    velocity, read the inertial torque of the motion's reversals and of the tracking's
+    ringing as ±1–2 Nm on a Panda whose levels are 0.15–0.36 Nm, and its paced readings
+    scattered 3–54 % of the level on the YuMi's plants.
+
+    Args:
+        t: Sample times [s], (N,).
+        q: Joint positions as read [rad], (N, n).
+        tau: Motor torque applied over the period ending at each sample [Nm], (N, n).
+        dynamics: The arm's model.
+        friction: The friction model (its mean).
+        pace: Slowest and fastest speed that count as sliding at the motion's pace [rad/s]:
+            slower, friction may hold the joint; faster, it jumps out of stiction.
+
+    Returns:
+        The velocities [rad/s], (N, n), and per sample the reading of the stretch it
+        belongs to [Nm] (NaN outside one; a stretch is at least three samples).
+    """
+    velocity = np.gradient(q, t, axis=0) if len(t) > 1 else np.zeros_like(q)
+    balance = np.array([tau[k] - dynamics.gravity(q[k]) - friction.mean(velocity[k], q[k])
+                        + dynamics.coriolis_transpose_times_velocity(q[k], velocity[k])
+                        for k in range(len(t))]).reshape(q.shape)  # fmt: skip
+    momentum = np.array([dynamics.momentum(q[k], velocity[k])
+                         for k in range(len(t))]).reshape(q.shape)  # fmt: skip
+    steps = np.diff(t, prepend=t[:1] if len(t) else t)[:, None]
+    unexplained = momentum - np.cumsum(balance * steps, axis=0)
+    speed = np.abs(velocity)
+    direction = np.where((speed > pace[0]) & (speed <= pace[1]), np.sign(velocity), 0.0)
+    readings = np.full(q.shape, np.nan)
+    for joint in range(q.shape[1]):
+        for first, last in _stretches(direction[:, joint]):
+            gained = unexplained[last, joint] - unexplained[first, joint]
+            readings[first : last + 1, joint] = gained / (t[last] - t[first])
+    return velocity, readings
+
+
+def _stretches(direction: FloatArray) -> list[tuple[int, int]]:
+    """First and last index of each run of ≥ 3 equal nonzero values of ``direction``."""
+    changes = np.flatnonzero(np.diff(direction) != 0.0) + 1
+    bounds = np.concatenate([[0], changes, [len(direction)]])
+    return [(int(a), int(b) - 1) for a, b in itertools.pairwise(bounds)
+            if direction[a] != 0.0 and b - a >= 3]  # fmt: skip
+
+
 def _robust_std(readings: FloatArray) -> FloatArray:
     """1.4826 × the median absolute deviation of each column, NaNs left out [Nm] (0 if none)."""
     with np.errstate(all="ignore"), warnings.catch_warnings():
@@ -405,10 +477,7 @@ class CalibrationRun:
         self._last_t = 0.0
         self.disturbance: str | None = None  # why the calibration must stop, if it must
         self.too_fast: int | None = None  # the joint that ran faster than max_speed, if one
-        self._plus: list[FloatArray] = []
-        self._minus: list[FloatArray] = []
-        # samples in which the motion drove each joint up / down at pace
-        self._asked = np.zeros((2, self.pose.shape[0]))
+        self._samples: list[tuple[float, FloatArray, FloatArray]] = []  # t, q, τ
         self._discrepancy = np.zeros_like(self.pose)  # Σ (τ_measured − τ_commanded) [Nm]
         self._discrepancies = 0
 
@@ -453,14 +522,15 @@ class CalibrationRun:
                                 "calibration motion: was the arm touched?")  # fmt: skip
 
     def record(
-        self, t: float, qd: FloatArray, estimate: FloatArray, discrepancy: FloatArray | None = None
+        self, t: float, q: FloatArray, tau: FloatArray, discrepancy: FloatArray | None = None
     ) -> None:
-        """Keep the observer's reading of joints sliding at the motion's pace, by direction.
+        """Keep one sample of the motion for its readings (:meth:`readings`).
 
         Args:
             t: Time since the calibration began [s].
-            qd: Joint velocities [rad/s].
-            estimate: The observer's reading [Nm].
+            q: Joint positions as the encoders read them [rad].
+            tau: The motor torque applied over the last period [Nm] (measured, or the
+                command that reached the drive).
             discrepancy: The measured motor torque minus the command it measures [Nm]
                 (None: the robot measures none); averaged into the torque offset.
         """
@@ -469,16 +539,38 @@ class CalibrationRun:
         if discrepancy is not None:
             self._discrepancy += discrepancy
             self._discrepancies += 1
+        self._samples.append((t, np.array(q, dtype=float), np.array(tau, dtype=float)))
+
+    def readings(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Times [s], joint velocities [rad/s] and readings [Nm] of the samples recorded.
+
+        The velocity is the encoders' central difference and a reading is the momentum
+        balance over the stretch the joint slid at the motion's pace
+        (:func:`sliding_readings`); NaN where it did not.
+        """
+        if not self._samples:
+            empty = np.zeros((0, self.pose.shape[0]))
+            return np.zeros(0), empty, empty
+        t = np.array([sample[0] for sample in self._samples])
+        q = np.array([sample[1] for sample in self._samples])
+        tau = np.array([sample[2] for sample in self._samples])
         p = self.parameters
-        _, velocity, _ = triangular_velocity(t - p.settle_time, p.speed, p.frequency)
-        wanted = self._direction * velocity
-        self._asked += [wanted > _SLIDING * p.speed, wanted < -_SLIDING * p.speed]
-        paced = (np.abs(qd) > _SLIDING * p.speed) & (np.abs(qd) <= _JUMPING * p.speed)
-        self._plus.append(np.where(paced & (qd > 0.0), estimate, np.nan))
-        self._minus.append(np.where(paced & (qd < 0.0), estimate, np.nan))
+        return (t, *sliding_readings(t, q, tau, self.dynamics, self.friction,
+                                     (_SLIDING * p.speed, _JUMPING * p.speed)))  # fmt: skip
 
     def result(self) -> Calibration:
         """The model error measured (refused with a reason when implausible)."""
+        return self.judge(*self.readings())
+
+    def judge(self, t: FloatArray, velocity: FloatArray, readings: FloatArray) -> Calibration:
+        """The model error the readings show (refused with a reason when implausible).
+
+        Args:
+            t: Times since the calibration began [s], (N,).
+            velocity: Joint velocities [rad/s], (N, n).
+            readings: What the model misses while each joint slides at pace [Nm], (N, n);
+                NaN where it does not.
+        """
         p = self.parameters
         if self.disturbance is not None:
             if self.too_fast is None:
@@ -494,13 +586,14 @@ class CalibrationRun:
                 return self._refused(f"joint {joint + 1}'s measured torque is "
                                      f"{offset[joint]:+.2f} Nm off its command: is it the "
                                      "motor torque?", offset=None)  # fmt: skip
-        plus, minus = np.array(self._plus), np.array(self._minus)
-        readings = np.array([np.sum(np.isfinite(plus), axis=0), np.sum(np.isfinite(minus), axis=0)])
-        slid = np.all(readings >= _ENOUGH, axis=0)
+        plus = np.where(velocity > 0.0, readings, np.nan).reshape(-1, self.pose.shape[0])
+        minus = np.where(velocity < 0.0, readings, np.nan).reshape(-1, self.pose.shape[0])
+        paced = np.array([np.sum(np.isfinite(plus), axis=0), np.sum(np.isfinite(minus), axis=0)])
+        slid = np.all(paced >= _ENOUGH, axis=0)
         if np.count_nonzero(slid) < 0.5 * slid.size:
             joints = ", ".join(str(j + 1) for j in np.flatnonzero(~slid))
             return self._refused(f"joint(s) {joints} did not slide both ways", offset=offset)
-        measured = slid & np.all(readings >= _MEASURED * self._asked, axis=0)
+        measured = slid & np.all(paced >= _MEASURED * self._asked(t), axis=0)
         e_plus = np.nanmedian(np.where(slid, plus, 0.0), axis=0)
         e_minus = np.nanmedian(np.where(slid, minus, 0.0), axis=0)  # a stuck joint: no error
         # the readings' gravity error, plus what the measurement adds that the arm never felt
@@ -527,6 +620,14 @@ class CalibrationRun:
         return Calibration(self.pose, gravity_error, coulomb_error, payload, bias, scale, True,
                            measured=measured, coulomb_spread=spread,
                            torque_offset=offset)  # fmt: skip
+
+    def _asked(self, t: FloatArray) -> FloatArray:
+        """Samples in which the motion drove each joint up / down at pace, (2, n)."""
+        p = self.parameters
+        _, velocity, _ = triangular_velocity(np.asarray(t) - p.settle_time, p.speed, p.frequency)
+        wanted = self._direction * np.reshape(velocity, (-1, 1))
+        threshold = _SLIDING * p.speed
+        return np.array([np.sum(wanted > threshold, axis=0), np.sum(wanted < -threshold, axis=0)])
 
     def torque_offset(self) -> FloatArray | None:
         """The measured motor torque minus its command, averaged over the run [Nm].

@@ -435,7 +435,8 @@ class LeadThrough:
         discrepancy = None
         if tau_measured is not None and told:
             discrepancy = tau_measured - self._sent.measured[0]
-        run.record(elapsed, qd, self.observer.update(q, qd, applied, model), discrepancy)
+        self.observer.update(q, qd, applied, model)  # warm for guiding; the run reads itself
+        run.record(elapsed, q, applied, discrepancy)
         command = run.command(elapsed, q, qd)
         if elapsed >= run.duration or run.disturbance is not None:
             self._finish_calibration(run.result(), t)
