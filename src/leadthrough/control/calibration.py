@@ -153,7 +153,8 @@ class CalibrationParameters:
             gain: 0.8 × 0.85 × 0.9 ≈ 0.61 to 1.2 × 1.15 / 0.9 ≈ 1.53 on the plants of
             ``benchmarks/guiding_quality.py``), so the band is symmetric in the ratio's
             logarithm. 0.85 passes them with room for the reading's own error (±10 %) and
-            still refuses the Panda's ringing readings (0.16–0.42×). With 0.75 (before), dry
+            refused the Panda's readings of its tracking's ringing through the observer's
+            lag (0.16–0.42×, before the momentum balance). With 0.75 (before), dry
             #25's joint 1, 0.60× the model's, read 0.57× and was refused; with ±0.5, 2 of the
             4 dry plants of seeds 9–12 (1.50×, 1.61×), and one of them, guided uncalibrated,
             ran away 112 mrad when released.
