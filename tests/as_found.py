@@ -101,15 +101,15 @@ def observer_readings(monkeypatch) -> None:
         return calibrate(controller, t, model, tau_measured)
 
     def recorded(run, t, q, tau, discrepancy=None):
-        samples = len(run._samples)
+        samples = len(run._balance)
         record(run, t, q, tau, discrepancy)
-        if len(run._samples) > samples:
+        if len(run._balance) > samples:
             estimate = current["controller"].observer.tau_ext_hat.copy()
             run.__dict__.setdefault("observed", []).append((current["velocity"], estimate))
 
     def readings(run):
         observed = run.__dict__.get("observed", [])
-        t = np.array([sample[0] for sample in run._samples])
+        t = run._balance.arrays()[0]
         velocity = np.array([sample[0] for sample in observed]).reshape(len(t), -1)
         estimate = np.array([sample[1] for sample in observed]).reshape(len(t), -1)
         speed, pace = np.abs(velocity), run.parameters.speed

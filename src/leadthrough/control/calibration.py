@@ -21,7 +21,8 @@ through the pace band (+0.22 → +0.06 Nm rising, −0.33 Nm falling, the same d
 its level came out 16 % high and the released arm slid 1.5 rad, in passive mode too.
 
 A reading is the momentum balance over each stretch a joint slides at pace, taken once the
-run is over (:func:`sliding_readings`): the generalized momentum from the encoders' central
+run is over (:mod:`~leadthrough.estimation.momentum_balance`, kept one sample behind the
+robot): the generalized momentum from the encoders' central
 difference, the torque the model misses as the slope of the momentum it does not explain.
 Before, the readings were the momentum observer's estimate at each sample, fed the robot's
 filtered velocity: its lag (~25 ms with the filter and the delay) turned the inertial
@@ -82,7 +83,6 @@ nobody touching. With ``M(q)`` every mode has the bandwidth ω.
 from __future__ import annotations
 
 import dataclasses
-import itertools
 import warnings
 from dataclasses import dataclass
 
@@ -90,6 +90,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from leadthrough.errors import ParameterError
+from leadthrough.estimation.momentum_balance import MomentumBalance, stretch_readings
 from leadthrough.friction.measured_level import MeasuredLevelError
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
@@ -366,63 +367,6 @@ class Calibration:
                                   np.array(far, dtype=float), slope)  # fmt: skip
 
 
-def sliding_readings(
-    t: FloatArray, q: FloatArray, tau: FloatArray, dynamics: Dynamics, friction: FrictionModel,
-    pace: tuple[float, float],
-) -> tuple[FloatArray, FloatArray]:  # fmt: skip
-    """Joint velocities and, over each stretch a joint slides at pace, the torque the model misses.
-
-    The generalized momentum ``p = M(q) q̇`` obeys ``ṗ = τ − G(q) − τ_f(q̇) + Cᵀ(q, q̇) q̇ +
-    τ_miss`` (SPEC §5), where ``τ_miss`` is the operator's torque plus every model error.
-    The momentum the model leaves unexplained, ``u(t) = p(t) − ∫ (τ − G − τ_f + Cᵀq̇) dt``,
-    therefore grows at ``τ_miss``, and over a stretch ``[a, b]`` the reading is
-    ``(u_b − u_a) / (t_b − t_a)``: the momentum observer's residual, taken after the run.
-    After the run the next sample is known, so ``q̇`` is the encoders' central difference,
-    without the lag of the robot's filtered velocity (15–40 Hz on the plants of
-    ``benchmarks/guiding_quality.py``, ~25 ms with the delay): the observer, fed that
-    velocity, read the inertial torque of the motion's reversals and of the tracking's
-    ringing as ±1–2 Nm on a Panda whose levels are 0.15–0.36 Nm, and its paced readings
-    scattered 3–54 % of the level on the YuMi's plants.
-
-    Args:
-        t: Sample times [s], (N,).
-        q: Joint positions as read [rad], (N, n).
-        tau: Motor torque applied over the period ending at each sample [Nm], (N, n).
-        dynamics: The arm's model.
-        friction: The friction model (its mean).
-        pace: Slowest and fastest speed that count as sliding at the motion's pace [rad/s]:
-            slower, friction may hold the joint; faster, it jumps out of stiction.
-
-    Returns:
-        The velocities [rad/s], (N, n), and per sample the reading of the stretch it
-        belongs to [Nm] (NaN outside one; a stretch is at least three samples).
-    """
-    velocity = np.gradient(q, t, axis=0) if len(t) > 1 else np.zeros_like(q)
-    balance = np.array([tau[k] - dynamics.gravity(q[k]) - friction.mean(velocity[k], q[k])
-                        + dynamics.coriolis_transpose_times_velocity(q[k], velocity[k])
-                        for k in range(len(t))]).reshape(q.shape)  # fmt: skip
-    momentum = np.array([dynamics.momentum(q[k], velocity[k])
-                         for k in range(len(t))]).reshape(q.shape)  # fmt: skip
-    steps = np.diff(t, prepend=t[:1] if len(t) else t)[:, None]
-    unexplained = momentum - np.cumsum(balance * steps, axis=0)
-    speed = np.abs(velocity)
-    direction = np.where((speed > pace[0]) & (speed <= pace[1]), np.sign(velocity), 0.0)
-    readings = np.full(q.shape, np.nan)
-    for joint in range(q.shape[1]):
-        for first, last in _stretches(direction[:, joint]):
-            gained = unexplained[last, joint] - unexplained[first, joint]
-            readings[first : last + 1, joint] = gained / (t[last] - t[first])
-    return velocity, readings
-
-
-def _stretches(direction: FloatArray) -> list[tuple[int, int]]:
-    """First and last index of each run of ≥ 3 equal nonzero values of ``direction``."""
-    changes = np.flatnonzero(np.diff(direction) != 0.0) + 1
-    bounds = np.concatenate([[0], changes, [len(direction)]])
-    return [(int(a), int(b) - 1) for a, b in itertools.pairwise(bounds)
-            if direction[a] != 0.0 and b - a >= 3]  # fmt: skip
-
-
 def _robust_std(readings: FloatArray) -> FloatArray:
     """1.4826 × the median absolute deviation of each column, NaNs left out [Nm] (0 if none)."""
     with np.errstate(all="ignore"), warnings.catch_warnings():
@@ -478,7 +422,7 @@ class CalibrationRun:
         self._last_t = 0.0
         self.disturbance: str | None = None  # why the calibration must stop, if it must
         self.too_fast: int | None = None  # the joint that ran faster than max_speed, if one
-        self._samples: list[tuple[float, FloatArray, FloatArray]] = []  # t, q, τ
+        self._balance = MomentumBalance(dynamics, friction)  # what the readings come from
         self._discrepancy = np.zeros_like(self.pose)  # Σ (τ_measured − τ_commanded) [Nm]
         self._discrepancies = 0
 
@@ -540,24 +484,18 @@ class CalibrationRun:
         if discrepancy is not None:
             self._discrepancy += discrepancy
             self._discrepancies += 1
-        self._samples.append((t, np.array(q, dtype=float), np.array(tau, dtype=float)))
+        self._balance.add(t, q, tau)
 
     def readings(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Times [s], joint velocities [rad/s] and readings [Nm] of the samples recorded.
 
         The velocity is the encoders' central difference and a reading is the momentum
         balance over the stretch the joint slid at the motion's pace
-        (:func:`sliding_readings`); NaN where it did not.
+        (:mod:`~leadthrough.estimation.momentum_balance`); NaN where it did not.
         """
-        if not self._samples:
-            empty = np.zeros((0, self.pose.shape[0]))
-            return np.zeros(0), empty, empty
-        t = np.array([sample[0] for sample in self._samples])
-        q = np.array([sample[1] for sample in self._samples])
-        tau = np.array([sample[2] for sample in self._samples])
-        p = self.parameters
-        return (t, *sliding_readings(t, q, tau, self.dynamics, self.friction,
-                                     (_SLIDING * p.speed, _JUMPING * p.speed)))  # fmt: skip
+        t, velocity, unexplained = self._balance.arrays()
+        pace = (_SLIDING * self.parameters.speed, _JUMPING * self.parameters.speed)
+        return t, velocity, stretch_readings(t, velocity, unexplained, pace)
 
     def result(self) -> Calibration:
         """The model error measured (refused with a reason when implausible)."""
