@@ -7,6 +7,7 @@ import pytest
 
 import leadthrough as lt
 from as_found import slow_calibration_motion
+from leadthrough.control import calibration
 from leadthrough.control.calibration import (
     Calibration,
     CalibrationParameters,
@@ -543,3 +544,15 @@ def test_every_plant_calibrates_and_its_released_arm_stays(yumi, identified_fric
         assert np.all(error < 0.05), check.plant
         assert releases[check.plant].stop_time <= 0.5 and releases[check.plant].drift < 1e-3
     assert plants_table(checks, releases).count("\n") == len(checks) + 1
+
+
+def test_the_column_medians_are_numpys_nanmedian():
+    """Bit for bit, every column: any length, NaNs anywhere, a column of NaNs only (NaN)."""
+    rng = np.random.default_rng(7)
+    for rows in (1, 2, 5, 200, 601, 900):
+        values = np.round(rng.normal(size=(rows, 7)), 2)  # ties too
+        values[rng.random((rows, 7)) < 0.4] = np.nan
+        values[:, 3] = np.nan
+        with pytest.warns(RuntimeWarning):  # NumPy's, for the column of NaNs
+            expected = np.nanmedian(values, axis=0)
+        np.testing.assert_array_equal(calibration._column_medians(values), expected)

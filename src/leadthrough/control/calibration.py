@@ -83,7 +83,6 @@ nobody touching. With ``M(q)`` every mode has the bandwidth ω.
 from __future__ import annotations
 
 import dataclasses
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -369,10 +368,23 @@ class Calibration:
 
 def _robust_std(readings: FloatArray) -> FloatArray:
     """1.4826 × the median absolute deviation of each column, NaNs left out [Nm] (0 if none)."""
-    with np.errstate(all="ignore"), warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # an all-NaN column: no reading
-        deviation = np.abs(readings - np.nanmedian(readings, axis=0))
-        return np.nan_to_num(1.4826 * np.nanmedian(deviation, axis=0))
+    with np.errstate(all="ignore"):
+        deviation = np.abs(readings - _column_medians(readings))
+        return np.nan_to_num(1.4826 * _column_medians(deviation))
+
+
+def _column_medians(values: FloatArray) -> FloatArray:
+    """``np.nanmedian(values, axis=0)`` in a few vector operations (NaN: no finite value).
+
+    NumPy's loops over the columns in Python: with the run's samples at 1 kHz its four
+    calls took a millisecond of the calibration's last period.
+    """
+    ordered = np.sort(values, axis=0)  # NaNs last
+    counts = np.count_nonzero(~np.isnan(values), axis=0)
+    columns = np.arange(values.shape[1])
+    low, high = np.maximum((counts - 1) // 2, 0), counts // 2
+    middle = (ordered[low, columns] + ordered[np.minimum(high, len(values) - 1), columns]) / 2
+    return np.where(counts > 0, middle, np.nan)
 
 
 def implausible_friction(scale: FloatArray, max_change: float) -> NDArray[np.bool_]:
@@ -533,8 +545,8 @@ class CalibrationRun:
             joints = ", ".join(str(j + 1) for j in np.flatnonzero(~slid))
             return self._refused(f"joint(s) {joints} did not slide both ways", offset=offset)
         measured = slid & np.all(paced >= _MEASURED * self._asked(t), axis=0)
-        e_plus = np.nanmedian(np.where(slid, plus, 0.0), axis=0)
-        e_minus = np.nanmedian(np.where(slid, minus, 0.0), axis=0)  # a stuck joint: no error
+        e_plus = _column_medians(np.where(slid, plus, 0.0))
+        e_minus = _column_medians(np.where(slid, minus, 0.0))  # a stuck joint: no error
         # the readings' gravity error, plus what the measurement adds that the arm never felt
         gravity_error = 0.5 * (e_plus + e_minus) + (0.0 if offset is None else offset)
         gravity_error = np.where(slid, gravity_error, 0.0)

@@ -141,7 +141,9 @@ class LeadThrough:
         """
         measured = self._identified if measured is None else measured
         p = self.parameters
-        self.dynamics = Dynamics(robot)
+        current = getattr(self, "dynamics", None)  # a calibration without a payload keeps it
+        if current is None or current.robot is not robot:
+            self.dynamics = Dynamics(robot)
         self.supervisor.use_model(self.dynamics)  # one model: robot and dynamics agree
         self.friction, self._friction_measured = friction, measured
         self.law.use_friction(friction, measured)
