@@ -20,10 +20,10 @@ lugre #29's joint 4, stuck and jumping at 3× the pace, were its filtered veloci
 through the pace band (+0.22 → +0.06 Nm rising, −0.33 Nm falling, the same direction):
 its level came out 16 % high and the released arm slid 1.5 rad, in passive mode too.
 
-A reading is the momentum balance over each stretch a joint slides at pace, taken once the
-run is over (:mod:`~leadthrough.estimation.momentum_balance`, kept one sample behind the
-robot): the generalized momentum from the encoders' central
-difference, the torque the model misses as the slope of the momentum it does not explain.
+A reading is the momentum balance over each stretch a joint slides at pace
+(:mod:`~leadthrough.estimation.momentum_balance`: kept one sample behind the robot, read
+when the run is over): the generalized momentum from the encoders' central difference, the
+torque the model misses as the slope of the momentum it does not explain.
 Before, the readings were the momentum observer's estimate at each sample, fed the robot's
 filtered velocity: its lag (~25 ms with the filter and the delay) turned the inertial
 torque of the motion's reversals and of the tracking's ringing into readings, which
@@ -376,14 +376,14 @@ def _robust_std(readings: FloatArray) -> FloatArray:
 def _column_medians(values: FloatArray) -> FloatArray:
     """``np.nanmedian(values, axis=0)`` in a few vector operations (NaN: no finite value).
 
-    NumPy's loops over the columns in Python: with the run's samples at 1 kHz its four
-    calls took a millisecond of the calibration's last period.
+    NumPy's ``nanmedian`` loops over the columns in Python: with the run's samples at 1 kHz
+    its calls took a millisecond of the calibration's last period.
     """
     ordered = np.sort(values, axis=0)  # NaNs last
     counts = np.count_nonzero(~np.isnan(values), axis=0)
     columns = np.arange(values.shape[1])
     low, high = np.maximum((counts - 1) // 2, 0), counts // 2
-    middle = (ordered[low, columns] + ordered[np.minimum(high, len(values) - 1), columns]) / 2
+    middle = (ordered[low, columns] + ordered[high, columns]) / 2
     return np.where(counts > 0, middle, np.nan)
 
 

@@ -15,7 +15,7 @@ observer takes as it comes: the inertial torque of a motion's reversals passes i
 estimate through that lag, and does not into ``u``.
 
 :class:`MomentumBalance` keeps ``u`` sample by sample, one sample behind the robot (a few
-model evaluations per period, ~20 µs on the YuMi); :func:`stretch_readings` turns it into
+model evaluations per period, ~16 µs on the YuMi); :func:`stretch_readings` turns it into
 readings over the stretches a joint slides at a given pace. The start-up calibration reads
 the model's error that way (:mod:`~leadthrough.control.calibration`).
 """
