@@ -240,14 +240,16 @@ class Calibration:
             felt; already added back to :attr:`gravity_error`. None: not read (no measured
             torque, or the run stopped early).
         coulomb_spread: How far a Coulomb reading may be off, per joint [Nm]: half the
-            robust spread (1.4826 × median absolute deviation) of the paced readings up
-            and down, combined (each stretch's reading counted once per sample). A joint
-            that sticks and jumps between stretches scatters them. The momentum balance
-            scatters little: 0–1 % of the level on the dry plants of seeds 1–8, whose levels
-            it reads 0.8 % off in the median and at most 5 % (``calibration_accuracy.py``,
-            seeds 1–16; a stretch starts on the Stribeck curve, so mostly high): the
-            stiction margin's 5 %, the least error of any level, bounds them at the pose.
-            None: not known (0).
+            standard deviations of the paced readings up and down, combined (each
+            stretch's reading counted once per sample; :func:`_scatter`). A joint that
+            sticks and jumps between stretches scatters them. On the YuMi's plants the
+            momentum balance scatters little (no measured joint of seeds 1–48 above 5 % of
+            its level), and reads the dry plants' levels 0.8 % off in the median and at
+            most 5 % (``calibration_accuracy.py``, seeds 1–16; a stretch starts on the
+            Stribeck curve, so mostly high): the stiction margin's 5 %, the least error of
+            any level, bounds them at the pose. On the Panda's, whose tracking rings,
+            stretches disagree by up to ±25 % of a shoulder's level and the levels come out
+            up to 14 % off. None: not known (0).
     """
 
     pose: FloatArray
@@ -366,11 +368,19 @@ class Calibration:
                                   np.array(far, dtype=float), slope)  # fmt: skip
 
 
-def _robust_std(readings: FloatArray) -> FloatArray:
-    """1.4826 × the median absolute deviation of each column, NaNs left out [Nm] (0 if none)."""
-    with np.errstate(all="ignore"):
-        deviation = np.abs(readings - _column_medians(readings))
-        return np.nan_to_num(1.4826 * _column_medians(deviation))
+def _scatter(readings: FloatArray) -> FloatArray:
+    """Standard deviation of each column's readings, NaNs left out [Nm] (0 if none).
+
+    Each stretch's reading counts once per sample of it. Not a robust spread: a joint read
+    from a few stretches that disagree (the Panda's shoulder, ±25 % of its level from one
+    stretch to the next) has half its samples on one value, and a median absolute
+    deviation of ~0 stated its level known to 5 % where it was 10–14 % off.
+    """
+    finite = np.isfinite(readings)
+    counts = np.count_nonzero(finite, axis=0)
+    mean = np.where(finite, readings, 0.0).sum(axis=0) / np.maximum(counts, 1)
+    squares = np.where(finite, (readings - mean) ** 2, 0.0).sum(axis=0)
+    return np.sqrt(squares / np.maximum(counts, 1))
 
 
 def _column_medians(values: FloatArray) -> FloatArray:
@@ -567,7 +577,7 @@ class CalibrationRun:
                                  f"{p.max_payload:g} kg allowed: was the arm touched?", scale,
                                  measured, offset)  # fmt: skip
         bias = np.where(slid, gravity_error + payload * per_kilogram, 0.0)
-        spread = np.where(measured, 0.5 * np.hypot(_robust_std(plus), _robust_std(minus)), 0.0)
+        spread = np.where(measured, 0.5 * np.hypot(_scatter(plus), _scatter(minus)), 0.0)
         return Calibration(self.pose, gravity_error, coulomb_error, payload, bias, scale, True,
                            measured=measured, coulomb_spread=spread,
                            torque_offset=offset)  # fmt: skip
