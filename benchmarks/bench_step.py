@@ -8,7 +8,10 @@ machine's load, and so does the p99 of the step's CPU time (this process's, with
 the time other processes took; the wall-clock p99 is what a loop would have met).
 Passive, active (calibrate=False, the description's friction), active with two
 virtual constraints, and active with the compensation following the push (the path of an
-arm whose start-up calibration was accepted, ``follow_push``).
+arm whose start-up calibration was accepted, ``follow_push``). Then the start-up
+calibration on a sampled plant (dry #1 of ``benchmarks/guiding_quality.py``) at 250 Hz and
+1 kHz: the median of its periods and its last one, which reads the run and rebuilds the
+model (wall clock, a warmed-up controller).
 
 Usage:
     python benchmarks/bench_step.py [--calls N] [--save FILE] [--compare FILE]
@@ -17,6 +20,7 @@ Usage:
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -25,6 +29,8 @@ from leadthrough.control.constraints import Box, Plane
 from leadthrough.friction.compensation import CoulombCompensationParameters
 from leadthrough.logs.sample import JointState
 from leadthrough.safety.supervisor import SupervisorState
+from leadthrough.twin.plants import sample_plant
+from leadthrough.twin.simulator import DigitalTwin
 from timing import parser, report
 
 #: The compensation following the push, as it does once a start-up calibration is accepted.
@@ -68,6 +74,22 @@ def timed(controller: lt.LeadThrough, calls: int, warmup: int = 200) -> dict:
             "cpu_p99_us": float(np.percentile(cpu_ns / 1e3, 99)), "calls": calls}  # fmt: skip
 
 
+def calibration_periods(robot: lt.RobotDescription, dt: float) -> tuple[float, float]:
+    """Median period of the start-up calibration and its last one [µs], on dry #1's twin."""
+    controller = lt.LeadThrough(robot, "active", dt=dt, calibrate=True)
+    controller.warm_up()
+    plant = sample_plant(robot, 1, "dry")
+    twin = DigitalTwin(robot, replace(plant.config, control_dt=dt))
+    periods = []
+    while controller.calibrating:
+        state = twin.read_state()
+        start = time.perf_counter_ns()
+        command = controller.step(state)
+        periods.append((time.perf_counter_ns() - start) / 1e3)
+        twin.send_torque(command)
+    return float(np.median(periods[:-1])), periods[-1]
+
+
 def main() -> None:
     args = parser(__doc__.splitlines()[0]).parse_args()
     robot = lt.robots.yumi()
@@ -87,6 +109,12 @@ def main() -> None:
               f"{stats['cpu_p99_us']:>15.1f}")  # fmt: skip
     worst = max(stats["p99_us"] for stats in results.values())
     print(f"a 1 kHz loop leaves {1000.0 / worst:.1f}× the worst p99 step time")
+    for rate in (250, 1000):
+        median, last = calibration_periods(robot, 1.0 / rate)
+        print(
+            f"start-up calibration at {rate} Hz: median period {median:.0f} µs, "
+            f"its last {last / 1e3:.2f} ms"
+        )
 
 
 if __name__ == "__main__":
