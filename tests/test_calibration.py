@@ -257,6 +257,14 @@ def _calibration_motion(robot, speeds, error, dt=0.004):
     return dynamics, friction, t, q, np.array(fine)
 
 
+def _kept_sample_by_sample(dynamics, friction, t, q, tau):
+    """Times, velocities and ``u`` of a :class:`MomentumBalance` fed the samples one by one."""
+    balance = MomentumBalance(dynamics, friction)
+    for sample in zip(t, q, tau, strict=True):
+        balance.add(*sample)
+    return balance.arrays()
+
+
 def test_the_readings_are_the_torque_the_model_misses_where_a_joint_slides_at_pace(yumi):
     """The momentum balance over each stretch at pace gives back what the model misses.
 
@@ -271,10 +279,7 @@ def test_the_readings_are_the_torque_the_model_misses_where_a_joint_slides_at_pa
     dynamics, friction, t, q, tau = _calibration_motion(
         yumi, speeds, lambda qd: 0.1 + 0.05 * np.sign(qd))  # fmt: skip
     pace = (0.025, 0.2)
-    balance = MomentumBalance(dynamics, friction)
-    for sample in zip(t, q, tau, strict=True):
-        balance.add(*sample)
-    times, velocity, unexplained = balance.arrays()
+    times, velocity, unexplained = _kept_sample_by_sample(dynamics, friction, t, q, tau)
     readings = stretch_readings(times, velocity, unexplained, pace)
     read = np.isfinite(readings)
     assert not read[:, 4].any() and not read[:, 5].any()
@@ -440,10 +445,7 @@ def test_the_balance_kept_one_sample_late_is_the_whole_runs(yumi):
     speeds = np.linspace(0.05, 0.15, yumi.n_joints)
     dynamics, friction, t, q, tau = _calibration_motion(yumi, speeds, lambda qd: 0.0 * qd)
     t = t + 1e-9 * np.sin(np.arange(len(t)))  # uneven steps, as a clock's
-    balance = MomentumBalance(dynamics, friction)
-    for sample in zip(t, q, tau, strict=True):
-        balance.add(*sample)
-    times, velocity, unexplained = balance.arrays()
+    times, velocity, unexplained = _kept_sample_by_sample(dynamics, friction, t, q, tau)
     whole = np.gradient(q, t, axis=0)
     explained = np.cumsum(
         [

@@ -547,8 +547,8 @@ class CalibrationRun:
                 return self._refused(f"joint {joint + 1}'s measured torque is "
                                      f"{offset[joint]:+.2f} Nm off its command: is it the "
                                      "motor torque?", offset=None)  # fmt: skip
-        plus = np.where(velocity > 0.0, readings, np.nan).reshape(-1, self.pose.shape[0])
-        minus = np.where(velocity < 0.0, readings, np.nan).reshape(-1, self.pose.shape[0])
+        plus = np.where(velocity > 0.0, readings, np.nan)
+        minus = np.where(velocity < 0.0, readings, np.nan)
         paced = np.array([np.sum(np.isfinite(plus), axis=0), np.sum(np.isfinite(minus), axis=0)])
         slid = np.all(paced >= _ENOUGH, axis=0)
         if np.count_nonzero(slid) < 0.5 * slid.size:

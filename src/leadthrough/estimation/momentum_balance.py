@@ -62,7 +62,7 @@ class MomentumBalance:
         self._tau.append(np.array(tau, dtype=float))
         n = len(self._t)
         if n == 2:
-            self._settle(0, (self._q[1] - self._q[0]) / (self._t[1] - self._t[0]))
+            self._settle(0, self._difference(1))  # the first sample: its forward difference
         elif n > 2:
             self._settle(n - 2, self._central(n - 2))
 
@@ -74,10 +74,14 @@ class MomentumBalance:
         n, joints = len(self._t), self.dynamics.robot.n_joints
         if n < 2:
             return np.array(self._t), np.zeros((n, joints)), np.zeros((n, joints))
-        last = (self._q[-1] - self._q[-2]) / (self._t[-1] - self._t[-2])
+        last = self._difference(n - 1)
         unexplained, _ = self._balanced(n - 1, last)
         return (np.array(self._t), np.array([*self._velocity, last]),
                 np.array([*self._unexplained, unexplained]))  # fmt: skip
+
+    def _difference(self, k: int) -> FloatArray:
+        """``(q_k − q_{k−1}) / (t_k − t_{k−1})`` [rad/s]: the velocity at either end of the run."""
+        return (self._q[k] - self._q[k - 1]) / (self._t[k] - self._t[k - 1])
 
     def _central(self, k: int) -> FloatArray:
         """Velocity at sample ``k`` from its neighbours, for uneven steps [rad/s]."""
