@@ -18,7 +18,9 @@ from leadthrough.estimation.classical import ClassicalMomentumObserver
 from leadthrough.estimation.observer import (
     MomentumObserver,
     ObserverParameters,
+    joint_torque_noise,
     process_noise,
+    ramp_lag,
     stationary_filter,
 )
 from leadthrough.friction.model import FrictionModel
@@ -199,6 +201,78 @@ def test_stationary_std_grows_with_model_noise():
     gains = [gain[1] for gain, _ in results]
     assert stds[0] < stds[1] < stds[2]
     assert gains[0] > gains[1] > gains[2] > 0.0
+
+
+def simulated_ramp_lag(model_noise: float, torque_noise: float, dt: float) -> float:
+    """Error over rate of the stationary discrete filter on a torque ramp, once settled [s].
+
+    The momentum integrates the ramp exactly over each period (its mean torque), as the
+    observer's trapezoidal input does for the model's terms.
+    """
+    (k1, k2), _ = stationary_filter(model_noise, torque_noise, R_THESIS, dt)
+    rate, p, p_hat, tau_hat = 1.0, 0.0, 0.0, 0.0
+    for k in range(int(3.0 / dt)):
+        p += dt * rate * (k + 0.5) * dt  # ∫ τ over the period
+        prior = p_hat + dt * tau_hat
+        p_hat, tau_hat = prior + k1 * (p - prior), tau_hat + k2 * (p - prior)
+    return (rate * (k + 1) * dt - tau_hat) / rate
+
+
+@pytest.mark.parametrize("model_noise", [0.0, 0.0056, 0.25])
+@pytest.mark.parametrize("torque_noise", [100.0, 1000.0])
+def test_ramp_lag_is_the_filters(model_noise, torque_noise):
+    """The closed form against the discrete filter on a ramp.
+
+    Within a period at 250 Hz, within 1 % at 10 kHz (the continuous-time limit it is
+    derived in).
+    """
+    lag = float(ramp_lag(model_noise, torque_noise, R_THESIS))
+    assert simulated_ramp_lag(model_noise, torque_noise, DT) == pytest.approx(lag, abs=DT)
+    assert simulated_ramp_lag(model_noise, torque_noise, 1e-4) == pytest.approx(lag, rel=0.01)
+
+
+@pytest.mark.filterwarnings("ignore::leadthrough.model.robots.AssumedDriveDataWarning")
+def test_max_lag_raises_the_torque_noise_of_slow_joints_only():
+    """A joint that Q_τ leaves slower than max_lag gets the Q_τ that meets it exactly.
+
+    The others, and every joint without max_lag, keep Q_τ. The UR10e's noisy shoulder and
+    elbow are raised, no joint of the YuMi or the Panda (whose guiding max_lag leaves as
+    it was).
+    """
+    parameters = ObserverParameters(torque_noise=100.0, max_lag=0.02)
+    model_noise = np.array([0.0, 0.0056, 0.05, 0.25, 2.0])
+    torque_noise = joint_torque_noise(parameters, model_noise)
+    lag = ramp_lag(model_noise, torque_noise, parameters.measurement_noise)
+    slow = ramp_lag(model_noise, 100.0, parameters.measurement_noise) > 0.02
+    np.testing.assert_array_equal(slow, [False, False, True, True, True])
+    np.testing.assert_allclose(lag[slow], 0.02, rtol=1e-9)
+    np.testing.assert_array_equal(torque_noise[~slow], 100.0)
+    unbounded = ObserverParameters(torque_noise=100.0)
+    np.testing.assert_array_equal(joint_torque_noise(unbounded, model_noise), 100.0)
+    for name, raised in (("yumi", 0), ("panda", 0), ("ur10e", 3)):
+        noise_std = FrictionModel.from_robot(getattr(lt.robots, name)()).noise_std
+        assert np.count_nonzero(joint_torque_noise(parameters, noise_std**2) > 100.0) == raised
+
+
+def test_max_lag_bounds_a_noisy_sliding_joints_lag(dynamics, friction):
+    """A sliding joint with 7× the YuMi's friction noise lags a push 20 ms with max_lag.
+
+    The time-varying observer of that joint (the UR10e's shoulder's noise) follows a ramp
+    52 ms late with Q_τ = 100 alone.
+    """
+    noisy = FrictionModel(**{**friction.__dict__, "noise_std": friction.noise_std * 7.0})
+    q, qd = dynamics.robot.home(), np.full(N, 0.3)
+    holding = consistent_torque(dynamics, noisy, q, qd)
+    lags = []
+    for bound in (None, 0.02):
+        observer = MomentumObserver(dynamics, noisy, dt=DT, torque_noise=100.0, max_lag=bound)
+        for k in range(1000):
+            push = 2.0 * k * DT  # [Nm], 2 Nm/s: the motor lets the hand's push through
+            estimate = observer.update(q, qd, holding - push)
+        lags.append((push - estimate[0]) / 2.0)
+    unbounded = float(ramp_lag(noisy.noise_std[0] ** 2, 100.0, R_THESIS))
+    assert lags[0] == pytest.approx(unbounded, abs=DT)
+    assert lags[1] == pytest.approx(0.02, abs=DT)
 
 
 def consistent_torque(dynamics, friction, q, qd) -> np.ndarray:
@@ -430,6 +504,8 @@ def test_reset_restores_initial_std(dynamics, friction, data):
         {"friction_noise_scale": -1.0},
         {"moving_velocity": -0.01},
         {"measurement_noise": float("nan")},
+        {"max_lag": 0.0},
+        {"max_lag": float("nan")},
     ],
 )
 def test_invalid_parameters_raise(dynamics, friction, overrides):

@@ -28,14 +28,16 @@ def yumi() -> lt.RobotDescription:
     return lt.robots.yumi()
 
 
-def _observer_run(yumi, friction: FrictionModel, compiled: bool, sliding: bool) -> np.ndarray:
+def _observer_run(
+    yumi, friction: FrictionModel, compiled: bool, sliding: bool, **parameters: float
+) -> np.ndarray:
     """τ̂_ext, std and error_std over 5000 seeded random periods, with a reset every 1000.
 
     ``sliding``: the friction taken as applied is the mean at the law's sliding velocity.
     """
     rng = np.random.default_rng(3)
     dynamics = lt.Dynamics(yumi)
-    observer = MomentumObserver(dynamics, friction, 0.004)
+    observer = MomentumObserver(dynamics, friction, 0.004, **parameters)
     observer.compiled = compiled
     rows = []
     for k in range(5000):
@@ -59,6 +61,18 @@ def test_compiled_observer_step_equals_the_numpy_reference(yumi, sliding):
         compiled = _observer_run(yumi, friction, compiled=True, sliding=sliding)
         reference = _observer_run(yumi, friction, compiled=False, sliding=sliding)
         np.testing.assert_allclose(compiled, reference, rtol=1e-12, atol=1e-12)
+
+
+def test_compiled_observer_step_takes_each_joints_torque_noise(yumi):
+    """Joints with their own Q_τ (``max_lag`` raises two noisy ones): equal to 1e-12."""
+    nominal = FrictionModel.from_robot(yumi)
+    noisy = replace(nominal, noise_std=nominal.noise_std * np.array([1, 8, 1, 5, 1, 1, 1]))
+    runs = [_observer_run(yumi, noisy, compiled, False, torque_noise=100.0, max_lag=0.02)
+            for compiled in (True, False)]  # fmt: skip
+    np.testing.assert_allclose(runs[0], runs[1], rtol=1e-12, atol=1e-12)
+    torque_noise = MomentumObserver(lt.Dynamics(yumi), noisy, 0.004, torque_noise=100.0,
+                                    max_lag=0.02).torque_noise  # fmt: skip
+    assert np.count_nonzero(torque_noise > 100.0) == 2  # the two noisy joints
 
 
 @pytest.mark.parametrize(

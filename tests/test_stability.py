@@ -1,5 +1,7 @@
 """The linearised coupled loop of active lead-through with a hand (experiments.stability)."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -97,3 +99,20 @@ def test_a_hands_own_mass_the_model_does_not_know_keeps_the_margin():
     assert least(LeadThroughParameters(), 3.0) >= MARGIN
     light = LeadThroughParameters(inertia_scale=0.3)
     assert least(light, 0.0) < 0.0 < least(light, 1.5) < least(light, 3.0)
+
+
+@pytest.mark.filterwarnings("ignore::leadthrough.model.robots.AssumedDriveDataWarning")
+def test_an_observer_slowed_by_friction_noise_costs_damping():
+    """The observer's lag bound (``max_lag`` 20 ms, the defaults) buys damping.
+
+    The UR10e's shoulder, whose friction noise would make its observer lag 52 ms, held by
+    a firm hand.
+    """
+    ur10e, defaults = lt.robots.ur10e(), LeadThroughParameters()
+    unbounded = LeadThroughParameters(
+        **{**defaults.__dict__, "observer": replace(defaults.observer, max_lag=None)}
+    )
+    bounded, slow = (min(worst_damping(ur10e, p, 3000.0, 100.0, DT, delay) for delay in (1, 2))
+                     for p in (defaults, unbounded))  # fmt: skip
+    assert slow >= MARGIN  # the linear loop holds either way ...
+    assert bounded > slow + 0.03  # ... but the lag costs a good share of its damping

@@ -55,7 +55,10 @@ class LeadThroughParameters:
             arm then moves by itself for ``calibration.duration``).
         observer: Kalman observer tuning (thesis §5.2.1, but Q_τ = 100 instead of 10: an
             estimate that lags less leaves the admittance more stability margin, see
-            :mod:`leadthrough.experiments.stability`).
+            :mod:`leadthrough.experiments.stability`; and no sliding joint lagging a
+            torque ramp by more than 20 ms, ``max_lag``: the YuMi's and the Panda's joints
+            lag 14–16 ms with Q_τ = 100, the UR10e's shoulder, whose friction noise is
+            7× the YuMi's, would lag 52 ms and takes Q_τ = 763 instead).
         safety: Safety supervisor limits (SPEC §7).
         tool_force: The joints' estimates read together as a force at the tool
             (:mod:`leadthrough.estimation.tool_force`): a joint that stiction holds takes
@@ -149,7 +152,7 @@ class LeadThroughParameters:
     dither: DitherParameters | None = field(default_factory=DitherParameters)
     calibration: CalibrationParameters | None = field(default_factory=CalibrationParameters)
     observer: ObserverParameters = field(
-        default_factory=lambda: ObserverParameters(torque_noise=100.0)
+        default_factory=lambda: ObserverParameters(torque_noise=100.0, max_lag=0.02)
     )
     safety: SafetyParameters = field(default_factory=SafetyParameters)
     tool_force: ToolForceParameters | None = field(default_factory=ToolForceParameters)

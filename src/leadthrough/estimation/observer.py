@@ -61,7 +61,7 @@ class ObserverParameters:
     Attributes:
         measurement_noise: R, intensity of the momentum measurement noise [(kg m²/s)² s].
         torque_noise: Q_τ, intensity of the external torque random walk [Nm²/s]: larger is
-            faster and noisier.
+            faster and noisier. With ``max_lag``, the least of each joint's.
         variant: ``"two_level"``, ``"time_varying"`` or ``"smooth_rate"`` (see the module
             docstring).
         moving_velocity: Two-level variant: a joint is moving above this speed [rad/s];
@@ -74,6 +74,13 @@ class ObserverParameters:
             R = 1e-8 gives ≈ 18 Hz while moving (the default observer's ≈ 15 Hz); with the
             thesis' R = 1e-6 it gives ≈ 9 Hz, too slow for the start-up calibration's
             strokes of a few mrad (take 3e4 there: ≈ 15 Hz, std ≈ 0.7 Nm).
+        max_lag: Two-state variants: the most a sliding joint's estimate may lag a torque
+            ramp [s] (:func:`ramp_lag`); None: no bound. A joint whose friction noise is so
+            large that ``torque_noise`` would leave it slower (Q_m = scale · σ² against
+            Q_τ sets the bandwidth) gets the Q_τ that meets the bound
+            (:func:`joint_torque_noise`): how fast an operator's torque changes does not
+            depend on how noisy the arm's friction is, and the lag is what the admittance's
+            coupled stability needs (:mod:`leadthrough.experiments.stability`).
     """
 
     measurement_noise: float = 1e-6
@@ -82,6 +89,7 @@ class ObserverParameters:
     moving_velocity: float | None = None
     friction_noise_scale: float = 1.0
     torque_rate_noise: float = 1000.0
+    max_lag: float | None = None
 
     def __post_init__(self) -> None:
         real(
@@ -95,6 +103,8 @@ class ObserverParameters:
         real("friction_noise_scale", self.friction_noise_scale, minimum=0, error=ParameterError)
         real("torque_rate_noise", self.torque_rate_noise, minimum=0, strict=True,
              error=ParameterError)  # fmt: skip
+        if self.max_lag is not None:
+            real("max_lag", self.max_lag, minimum=0, strict=True, error=ParameterError)
         if self.variant not in VARIANTS:
             raise ParameterError("variant", f"one of {VARIANTS}, got {self.variant!r}")
         if self.moving_velocity is not None:
@@ -108,12 +118,47 @@ class ObserverParameters:
 
 
 def process_noise(
-    model_noise: FloatArray, torque_noise: float, dt: float
+    model_noise: FloatArray, torque_noise: float | FloatArray, dt: float
 ) -> tuple[FloatArray, ...]:
     """Entries (Q₁₁, Q₁₂, Q₂₂) of the exactly discretised process noise Q_d, per joint."""
     return (model_noise * dt + torque_noise * dt**3 / 3.0,
-            np.full_like(model_noise, torque_noise * dt**2 / 2.0),
-            np.full_like(model_noise, torque_noise * dt))  # fmt: skip
+            np.full_like(model_noise, 1.0) * (torque_noise * dt**2 / 2.0),
+            np.full_like(model_noise, 1.0) * (torque_noise * dt))  # fmt: skip
+
+
+def ramp_lag(
+    model_noise: ArrayLike, torque_noise: ArrayLike, measurement_noise: float
+) -> FloatArray:
+    """How far a two-state filter's estimate lags a torque ramp [s]: error / ramp rate.
+
+    The stationary continuous-time filter (Q_m, Q_τ, R as in the module docstring) has
+    P₁₂ = √(R Q_τ), P₁₁ = √(R (Q_m + 2 P₁₂)) and gains L = P₁·/R; a ramp leaves the
+    error ``L₁ / L₂`` times its rate::
+
+        T = √(Q_m / Q_τ + 2 √(R / Q_τ))
+
+    (the discrete filter's ``K₁ / K₂`` over its first period, within a period of it).
+    """
+    q_m, q_tau = np.asarray(model_noise, dtype=float), np.asarray(torque_noise, dtype=float)
+    return np.sqrt(q_m / q_tau + 2.0 * np.sqrt(measurement_noise / q_tau))
+
+
+def joint_torque_noise(parameters: ObserverParameters, model_noise: ArrayLike) -> FloatArray:
+    """Q_τ of each joint whose sliding model noise is ``model_noise`` (Q_m) [Nm²/s].
+
+    ``parameters.torque_noise``, raised where the joint would lag a ramp by more than
+    ``parameters.max_lag`` (:func:`ramp_lag` solved for Q_τ: with x = 1/√Q_τ,
+    Q_m x² + 2√R x = T², x = T² / (√R + √(R + Q_m T²))). The smooth-rate variant
+    (Q_r, not Q_τ) and ``max_lag=None`` leave it as given.
+    """
+    q_m = np.asarray(model_noise, dtype=float)
+    least = np.full(q_m.shape, parameters.torque_noise)
+    lag = parameters.max_lag
+    if lag is None or parameters.variant == "smooth_rate":
+        return least
+    root_r = math.sqrt(parameters.measurement_noise)
+    x = lag**2 / (root_r + np.sqrt(parameters.measurement_noise + q_m * lag**2))
+    return np.maximum(least, 1.0 / x**2)
 
 
 def stationary_filter(
@@ -143,7 +188,8 @@ def sliding_gains(parameters: ObserverParameters, friction_std: float, dt: float
     if parameters.variant == "smooth_rate":
         return smooth_rate.stationary_filter(scale * dt, parameters.torque_rate_noise,
                                              parameters.measurement_noise, dt)[0]  # fmt: skip
-    return stationary_filter(scale, parameters.torque_noise, parameters.measurement_noise, dt)[0]
+    torque_noise = float(joint_torque_noise(parameters, scale))
+    return stationary_filter(scale, torque_noise, parameters.measurement_noise, dt)[0]
 
 
 class MomentumObserver:
@@ -180,6 +226,10 @@ class MomentumObserver:
             parameters = ObserverParameters(**{**parameters.__dict__, **overrides})
         self.parameters = parameters
         n = dynamics.n
+        #: Q_τ of each joint [Nm²/s] (:func:`joint_torque_noise`, at its sliding Q_m = scale · σ²)
+        self.torque_noise = joint_torque_noise(
+            parameters, parameters.friction_noise_scale * np.asarray(self.friction.noise_std) ** 2
+        )
         self._levels = self._two_level_gains() if parameters.variant == "two_level" else None
         self._smooth = None
         if parameters.variant == "smooth_rate":
@@ -195,15 +245,12 @@ class MomentumObserver:
         self._error_std = self._filter[7]
         self._relative_error = np.array(self.friction.relative_error, dtype=float)
         self._level_std = np.ascontiguousarray(self.friction.level_std, dtype=float)
-        # the entries of Q_d that do not depend on Q_m (Q_m enters Q₁₁ as Q_m dt)
-        self._q11_torque, self._q12, self._q22 = process_noise(
-            np.zeros(n), parameters.torque_noise, self.dt
-        )
+        # the entries of Q_d that do not depend on Q_m (Q_m enters Q₁₁ as Q_m dt), per joint
+        self._torque_rows = np.array(process_noise(np.zeros(n), self.torque_noise, self.dt))
+        self._q11_torque, self._q12, self._q22 = self._torque_rows
         self._noise_d = parameters.measurement_noise / self.dt
-        # (dt, friction_noise_scale, Q₁₁ without Q_m, Q₁₂, Q₂₂, R_d) for the compiled step
-        self._constants = np.array([self.dt, parameters.friction_noise_scale,
-                                    self._q11_torque[0] if n else 0.0, self._q12[0] if n else 0.0,
-                                    self._q22[0] if n else 0.0, self._noise_d])  # fmt: skip
+        # (dt, friction_noise_scale, R_d) for the compiled step
+        self._constants = np.array([self.dt, parameters.friction_noise_scale, self._noise_d])
         self._terms = np.zeros((4, n))  # the friction terms of a period, when not given
         self._no_mean = np.zeros(n)  # the compiled step's ``credited`` when none is given
         self.reset()
@@ -260,7 +307,7 @@ class MomentumObserver:
         self._sample: tuple[FloatArray, FloatArray] | None = None
         self._error_in_filter = False  # whether the latest step wrote error_std's row
         self._tau[:] = 0.0
-        variance = self.parameters.torque_noise  # 1 s of random walk
+        variance = self.torque_noise  # 1 s of random walk
         self._cov_rows[:2] = 0.0
         self._cov_rows[2] = variance
         self._std[:] = np.sqrt(variance)
@@ -315,7 +362,7 @@ class MomentumObserver:
                 _time_varying_step(self._filter, tau, model.mass, qd, model.coriolis_drift,
                                    model.gravity, terms, credited, friction_mean is not None,
                                    self.friction.noise_std, self._level_std,
-                                   self._constants)  # fmt: skip
+                                   self._torque_rows, self._constants)  # fmt: skip
                 self._error_in_filter = True
                 return self._tau.copy()
         momentum = model.mass @ qd
@@ -418,9 +465,10 @@ class MomentumObserver:
             ("still", np.zeros_like(threshold)),
             ("moving", 2.0 * threshold + 0.05),
         ):
-            for noise in self.parameters.friction_noise_scale * self.friction.std(speed) ** 2:
+            noises = self.parameters.friction_noise_scale * self.friction.std(speed) ** 2
+            for noise, torque_noise in zip(noises, self.torque_noise, strict=True):
                 p = self.parameters
-                gain, std = stationary_filter(noise, p.torque_noise, p.measurement_noise, self.dt)
+                gain, std = stationary_filter(noise, torque_noise, p.measurement_noise, self.dt)
                 for key, value in (("k1", gain[0]), ("k2", gain[1]), ("std", std)):
                     levels.setdefault(f"{key}_{name}", []).append(value)
         return {key: np.array(values) for key, values in levels.items()} | {"threshold": threshold}
@@ -428,7 +476,7 @@ class MomentumObserver:
 
 @kernel
 def _time_varying_step(state, tau, mass, qd, coriolis_drift, gravity, terms, credited, given,
-                       noise_std, level_std, constants):  # fmt: skip
+                       noise_std, level_std, torque_rows, constants):  # fmt: skip
     """One step of the time-varying filter, all joints, in place (compiled, ~1 µs).
 
     The same arithmetic, in the same order, as :meth:`MomentumObserver.update` with
@@ -441,9 +489,11 @@ def _time_varying_step(state, tau, mass, qd, coriolis_drift, gravity, terms, cre
     and :attr:`~MomentumObserver.error_std`, written here), ``terms`` are the friction
     terms, rows as :meth:`~leadthrough.friction.model.FrictionModel.terms_into`;
     ``credited`` is the friction the filter takes as applied when ``given`` (the caller's
-    ``friction_mean``), else the mean of ``terms``.
+    ``friction_mean``), else the mean of ``terms``; ``torque_rows`` are each joint's
+    entries of Q_d without Q_m (``MomentumObserver._torque_rows``), ``constants`` are
+    (dt, friction_noise_scale, R_d).
     """
-    dt, scale, q11_torque, q12, q22, noise_d = constants
+    dt, scale, noise_d = constants
     p, tau_hat, previous_drift, cov, std = state[0], state[1], state[2], state[3:6], state[6]
     error_std = state[7]
     n = p.shape[0]
@@ -465,9 +515,9 @@ def _time_varying_step(state, tau, mass, qd, coriolis_drift, gravity, terms, cre
         innovation = momentum - prior_p
         p11, p12, p22 = cov[0, i], cov[1, i], cov[2, i]
         model_noise = scale * (friction_std * friction_std)
-        prior12 = p12 + dt * p22 + q12
-        prior22 = p22 + q22
-        prior11 = p11 + dt * (2.0 * p12 + dt * p22) + dt * model_noise + q11_torque
+        prior12 = p12 + dt * p22 + torque_rows[1, i]
+        prior22 = p22 + torque_rows[2, i]
+        prior11 = p11 + dt * (2.0 * p12 + dt * p22) + dt * model_noise + torque_rows[0, i]
         k1 = prior11 / (prior11 + noise_d)
         k2 = prior12 / (prior11 + noise_d)
         keep = 1.0 - k1
