@@ -18,6 +18,17 @@ def test_demo_writes_a_report_with_figures_and_replays_accurately(tmp_path, caps
         assert figure in report and (tmp_path / figure).stat().st_size > 10_000
     assert (tmp_path / "session.mcap").stat().st_size > 10_000
     assert "Supervisor events" in report
+    # the same session guided in passive mode: active is lighter, and shakes no more than
+    # issue 13 allows (1.5× passive's tool velocity above 4 Hz)
+    ratio = float(re.search(r"active / passive \*\*([\d.]+)\*\*", report).group(1))
+    taught, passive = map(
+        float,
+        re.search(
+            r"\*\*([\d.]+) mm/s\*\* against .*?passive mode ([\d.]+) mm/s", report, re.S
+        ).groups(),
+    )
+    assert ratio < 1.0
+    assert taught <= 1.5 * passive
 
 
 def test_teach_then_replay_from_the_command_line(tmp_path, capsys):

@@ -55,6 +55,8 @@ class DemoResult:
     Attributes:
         friction: The identified friction model.
         taught: The teaching run on the twin (ground truth included).
+        passive: The same session guided in passive mode (not recorded): what the
+            operator would have felt and taught without the observer in the loop.
         estimate: Recorded estimate of the operator torque [Nm], (N, n).
         estimate_std: Its standard deviation [Nm], (N, n).
         events: Supervisor events (t, kind, detail).
@@ -66,6 +68,7 @@ class DemoResult:
 
     friction: FrictionModel
     taught: SimulationResult
+    passive: SimulationResult
     estimate: FloatArray
     estimate_std: FloatArray
     events: list
@@ -95,16 +98,20 @@ def run_demo(out: Path, robot: RobotDescription, config: TwinConfig = REALISTIC_
     controller = LeadThrough(robot, "active", twin.dt, friction, calibrate=True)
     with SessionRecorder(path, robot, {"mode": "active", "dt": twin.dt}) as recorder:
         taught = simulate(twin, RecordingController(controller, recorder), TEACHING_SECONDS)
+    twin = DigitalTwin(robot, teach_config, ScriptedOperator(teaching_actions(robot)))
+    passive = simulate(twin, LeadThrough(robot, "passive", twin.dt, friction, calibrate=True),
+                       TEACHING_SECONDS)  # fmt: skip
     seconds["teaching"] = time.perf_counter() - clock
 
     clock = time.perf_counter()
     say(f"3/4 replaying the recorded path ({path.name}) …")
     recording = read_recording(path)
     taught = taught.after(recording.t[0], restart_clock=False)  # from the end of the calibration
+    passive = passive.after(recording.t[0], restart_clock=False)  # the same calibration time
     replay_config = replace(teach_config, seed=config.seed + 1)
     replayed, errors, _ = replay_recording(robot, recording.t, recording.q, friction, replay_config)
     seconds["replay"] = time.perf_counter() - clock
-    return DemoResult(friction, taught, recording.tau_ext_hat, recording.tau_ext_std,
+    return DemoResult(friction, taught, passive, recording.tau_ext_hat, recording.tau_ext_std,
                       recording.events, replayed, errors, path, seconds)  # fmt: skip
 
 

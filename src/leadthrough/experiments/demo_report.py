@@ -79,9 +79,12 @@ def _operator_torque(result: DemoResult):
 
 def _effort(result: DemoResult, robot: RobotDescription):
     plt = pyplot()
-    sim = result.taught
+    sim, passive = result.taught, result.passive
     figure, axis = plt.subplots(figsize=(10, 3.5), constrained_layout=True)
-    axis.plot(sim.t, sim.operator_force, color="k")
+    axis.plot(passive.t, passive.operator_force, color="tab:gray", lw=1.0,
+              label="the same session, passive mode")  # fmt: skip
+    axis.plot(sim.t, sim.operator_force, color="k", label="active lead-through (taught)")
+    axis.legend(fontsize="small", loc="center left")
     for action in teaching_actions(robot):
         axis.axvspan(action.start, action.stop, alpha=0.1)
         axis.text(action.start, axis.get_ylim()[1] * 0.9, action.label, fontsize="small")
@@ -112,6 +115,9 @@ def _markdown(result: DemoResult, picture: str, robot: RobotDescription) -> str:
     name = robot.name
     errors, sim = result.replay_error, result.taught
     smooth = path_smoothness(sim, teaching_actions(robot))
+    passive = path_smoothness(result.passive, teaching_actions(robot))
+    force, passive_force = (np.sqrt(np.mean(run.operator_force**2))
+                            for run in (sim, result.passive))  # fmt: skip
     events = [e for e in result.events if e[1] not in ("mode",)]
     event_lines = "\n".join(f"| {t:.2f} | {kind} | {detail} |" for t, kind, detail in events[:20])
     seconds = ", ".join(f"{name} {value:.1f} s" for name, value in result.seconds.items())
@@ -139,12 +145,15 @@ Estimation error over the session (all joints, moving samples): RMS
 
 ![effort](operator_effort.png)
 
-Operator's hand force: RMS {np.sqrt(np.mean(sim.operator_force**2)):.2f} N,
-peak {sim.operator_force.max():.1f} N.
+Operator's hand force: RMS **{force:.2f} N**, peak {sim.operator_force.max():.1f} N; the
+same session guided in passive mode (the thesis' gravity and friction compensation, no
+observer in the loop): RMS {passive_force:.2f} N, peak {result.passive.operator_force.max():.1f} N
+(active / passive **{force / passive_force:.2f}**).
 
 Smoothness of the taught path: tool velocity above 4 Hz, RMS over the session,
 **{1e3 * smooth["taught"]:.1f} mm/s** against {1e3 * smooth["intended"]:.1f} mm/s in the
-paths the operator's hand followed (RMS tool speed {1e3 * smooth["speed"]:.0f} mm/s).
+paths the operator's hand followed (RMS tool speed {1e3 * smooth["speed"]:.0f} mm/s);
+passive mode {1e3 * passive["taught"]:.1f} mm/s.
 
 ## Supervisor events
 | t [s] | kind | detail |

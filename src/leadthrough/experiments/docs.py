@@ -206,9 +206,12 @@ def _demo(robot: RobotDescription, out: Path, numbers: dict[str, str]) -> Path:
         "demo.tool_rms_mm": _f(1e3 * errors["tool_rms"]),
         "demo.tool_max_mm": f"{1e3 * errors['tool_max']:.1f}",
         "demo.force_rms_n": _f(float(np.sqrt(np.mean(sim.operator_force**2)))),
+        "demo.passive_force_rms_n": _f(float(np.sqrt(np.mean(result.passive.operator_force**2)))),
     }
     smooth = path_smoothness(sim, teaching_actions(robot))
     numbers |= {f"demo.vibration_{key}_mm_s": _f(1e3 * value) for key, value in smooth.items()}
+    passive = path_smoothness(result.passive, teaching_actions(robot))["taught"]
+    numbers["demo.vibration_passive_mm_s"] = _f(1e3 * passive)
     return out / "friction.toml"
 
 
