@@ -1,5 +1,7 @@
 """Lead-through on the twin: effort, release and stay, stability, safety, bad input."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from scipy.ndimage import uniform_filter1d
@@ -209,6 +211,25 @@ def test_parameters_load_from_toml(tmp_path):
     path.write_text("inertia = 0.5\n")
     with pytest.raises(lt.ParameterError, match="inertia"):
         LeadThroughParameters.from_toml(path)
+
+
+def test_a_toml_table_changes_only_the_fields_it_names(tmp_path):
+    """``[observer] variant = ...`` keeps the guiding observer's Q_τ = 100 and lag bound.
+
+    Before, a nested table started from its class's defaults: naming one observer field
+    silently put back the thesis' Q_τ = 10 and no lag bound (a 4× slower estimate on the
+    YuMi), and ``max_lag = false`` is how to drop the bound.
+    """
+    path = tmp_path / "lead.toml"
+    path.write_text('[observer]\nvariant = "two_level"\n[dither]\nfrequency = 12.0\n')
+    parameters = LeadThroughParameters.from_toml(path)
+    guiding = LeadThroughParameters().observer
+    assert parameters.observer == dataclasses.replace(guiding, variant="two_level")
+    assert parameters.observer.torque_noise == 100.0 and parameters.observer.max_lag == 0.02
+    assert parameters.dither == DitherParameters(frequency=12.0)
+    path.write_text("[observer]\nmax_lag = false\n")
+    observer = LeadThroughParameters.from_toml(path).observer
+    assert observer.max_lag is None and observer.torque_noise == 100.0
 
 
 def test_toml_false_sets_what_may_be_none(tmp_path):

@@ -293,12 +293,15 @@ _NESTED = {"compensation": CoulombCompensationParameters, "dither": DitherParame
            "calibration": CalibrationParameters, "tool_force": ToolForceParameters}  # fmt: skip
 
 
-def from_dict(kind: type, data: dict[str, Any], where: str) -> Any:
+def from_dict(kind: type, data: dict[str, Any], where: str, base: Any = None) -> Any:
     """Build the dataclass ``kind`` from ``data``, nested tables included.
 
     TOML has no null: ``false`` sets a field that may be None to None (a table switched
     off, ``dither = false``, or a setting that is off, ``[dither] creep = false``). Bad
-    values name the file and the field.
+    values name the file and the field. A nested table changes the fields it names of the
+    controller's own default for it (``[observer] variant = "two_level"`` keeps the
+    guiding observer's Q_τ = 100 and ``max_lag``, not the thesis' ``ObserverParameters()``);
+    ``base`` is that default.
     """
     fields = {item.name: item for item in dataclasses.fields(kind)}
     unknown = sorted(set(data) - set(fields))
@@ -308,18 +311,25 @@ def from_dict(kind: type, data: dict[str, Any], where: str) -> Any:
     for name, value in data.items():
         nested = _NESTED.get(name) if kind is LeadThroughParameters else None
         if nested is not None and isinstance(value, dict):
-            value = from_dict(nested, value, f"{where}: {name}")
+            value = from_dict(nested, value, f"{where}: {name}", _default(fields[name]))
         if value is False and _may_be_none(fields[name]):
             value = None
         values[name] = value
     try:
-        return kind(**values)
+        return kind(**values) if base is None else dataclasses.replace(base, **values)
     except TypeError as error:
         raise ParameterError(where, str(error)) from None
     except ParameterError as error:
         if error.parameter.startswith(where):
             raise
         raise ParameterError(f"{where}: {error.parameter}", error.reason) from None
+
+
+def _default(item: dataclasses.Field[Any]) -> Any:
+    """The default of a dataclass field (its factory's value), None if it has none."""
+    if item.default_factory is not dataclasses.MISSING:
+        return item.default_factory()
+    return None if item.default is dataclasses.MISSING else item.default
 
 
 def _may_be_none(item: dataclasses.Field[Any]) -> bool:
