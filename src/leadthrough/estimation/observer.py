@@ -122,8 +122,8 @@ def process_noise(
 ) -> tuple[FloatArray, ...]:
     """Entries (Q₁₁, Q₁₂, Q₂₂) of the exactly discretised process noise Q_d, per joint."""
     return (model_noise * dt + torque_noise * dt**3 / 3.0,
-            np.full_like(model_noise, 1.0) * (torque_noise * dt**2 / 2.0),
-            np.full_like(model_noise, 1.0) * (torque_noise * dt))  # fmt: skip
+            np.ones_like(model_noise) * (torque_noise * dt**2 / 2.0),
+            np.ones_like(model_noise) * (torque_noise * dt))  # fmt: skip
 
 
 def ramp_lag(
@@ -137,7 +137,7 @@ def ramp_lag(
 
         T = √(Q_m / Q_τ + 2 √(R / Q_τ))
 
-    (the discrete filter's ``K₁ / K₂`` over its first period, within a period of it).
+    The discrete filter's lag on a ramp is within a period of it (``tests/test_observer.py``).
     """
     q_m, q_tau = np.asarray(model_noise, dtype=float), np.asarray(torque_noise, dtype=float)
     return np.sqrt(q_m / q_tau + 2.0 * np.sqrt(measurement_noise / q_tau))
