@@ -230,6 +230,12 @@ def test_a_toml_table_changes_only_the_fields_it_names(tmp_path):
     path.write_text("[observer]\nmax_lag = false\n")
     observer = LeadThroughParameters.from_toml(path).observer
     assert observer.max_lag is None and observer.torque_noise == 100.0
+    # a table that cannot be off: before, ``observer = false`` was kept as False and the
+    # observer silently fell back to the thesis' Q_τ = 10
+    for text in ("observer = false\n", "safety = 3\n", "dither = true\n"):
+        path.write_text(text)
+        with pytest.raises(lt.ParameterError, match=r"lead\.toml: \w+: expected a table"):
+            LeadThroughParameters.from_toml(path)
 
 
 def test_toml_false_sets_what_may_be_none(tmp_path):

@@ -255,10 +255,10 @@ def test_max_lag_raises_the_torque_noise_of_slow_joints_only():
 
 
 def test_max_lag_bounds_a_noisy_sliding_joints_lag(dynamics, friction):
-    """A sliding joint with 7× the YuMi's friction noise lags a push 20 ms with max_lag.
+    """A sliding joint with 7× the YuMi's friction noise lags a push ≤ 20 ms with max_lag.
 
     The time-varying observer of that joint (the UR10e's shoulder's noise) follows a ramp
-    52 ms late with Q_τ = 100 alone.
+    about 52 ms late with Q_τ = 100 alone (the closed form, within a period).
     """
     noisy = FrictionModel(**{**friction.__dict__, "noise_std": friction.noise_std * 7.0})
     q, qd = dynamics.robot.home(), np.full(N, 0.3)
@@ -271,8 +271,8 @@ def test_max_lag_bounds_a_noisy_sliding_joints_lag(dynamics, friction):
             estimate = observer.update(q, qd, holding - push)
         lags.append((push - estimate[0]) / 2.0)
     unbounded = float(ramp_lag(noisy.noise_std[0] ** 2, 100.0, R_THESIS))
-    assert lags[0] == pytest.approx(unbounded, abs=DT)
-    assert lags[1] == pytest.approx(0.02, abs=DT)
+    assert lags[0] == pytest.approx(unbounded, abs=DT) and unbounded > 0.04
+    assert lags[1] <= 0.02  # the bound (the discrete filter settles ~0.8 period earlier)
 
 
 def consistent_torque(dynamics, friction, q, qd) -> np.ndarray:

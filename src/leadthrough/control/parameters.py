@@ -57,8 +57,8 @@ class LeadThroughParameters:
             estimate that lags less leaves the admittance more stability margin, see
             :mod:`leadthrough.experiments.stability`; and no sliding joint lagging a
             torque ramp by more than 20 ms, ``max_lag``: the YuMi's and the Panda's joints
-            lag 14–16 ms with Q_τ = 100, the UR10e's shoulder, whose friction noise is
-            7× the YuMi's, would lag 52 ms and takes Q_τ = 763 instead).
+            lag 14–16 ms with Q_τ = 100, the UR10e's shoulder joints, whose friction noise
+            is 7× the YuMi's, would lag 52 ms and take Q_τ = 763 instead).
         safety: Safety supervisor limits (SPEC §7).
         tool_force: The joints' estimates read together as a force at the tool
             (:mod:`leadthrough.estimation.tool_force`): a joint that stiction holds takes
@@ -314,10 +314,15 @@ def from_dict(kind: type, data: dict[str, Any], where: str, base: Any = None) ->
             value = from_dict(nested, value, f"{where}: {name}", _default(fields[name]))
         if value is False and _may_be_none(fields[name]):
             value = None
+        elif nested is not None and not isinstance(value, nested):
+            raise ParameterError(
+                f"{where}: {name}",
+                f"expected a table [{name}]" + (" or false" if _may_be_none(fields[name]) else ""),
+            )
         values[name] = value
     try:
         return kind(**values) if base is None else dataclasses.replace(base, **values)
-    except TypeError as error:
+    except (TypeError, ValueError) as error:
         raise ParameterError(where, str(error)) from None
     except ParameterError as error:
         if error.parameter.startswith(where):
