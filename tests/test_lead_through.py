@@ -217,8 +217,8 @@ def test_a_toml_table_changes_only_the_fields_it_names(tmp_path):
     """``[observer] variant = ...`` keeps the guiding observer's Q_τ = 100 and lag bound.
 
     Before, a nested table started from its class's defaults: naming one observer field
-    silently put back the thesis' Q_τ = 10 and no lag bound (a 4× slower estimate on the
-    YuMi), and ``max_lag = false`` is how to drop the bound.
+    silently put back the thesis' Q_τ = 10 and no lag bound (an estimate lagging 25–35 ms
+    instead of 14–16 ms on the YuMi), and ``max_lag = false`` is how to drop the bound.
     """
     path = tmp_path / "lead.toml"
     path.write_text('[observer]\nvariant = "two_level"\n[dither]\nfrequency = 12.0\n')
