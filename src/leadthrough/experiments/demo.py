@@ -120,6 +120,11 @@ def tool_path(dynamics: Dynamics, q: FloatArray) -> FloatArray:
     return np.array([dynamics.pose(row)[:3, 3] for row in q])
 
 
+def hand_force_rms(run: SimulationResult) -> float:
+    """RMS of the operator's hand force over a session [N] (the report's effort figure)."""
+    return float(np.sqrt(np.mean(run.operator_force**2)))
+
+
 def path_smoothness(taught: SimulationResult, actions: list[Action]) -> dict[str, float]:
     """How smooth the taught tool path is, against the path the operator meant [m/s].
 

@@ -6,7 +6,12 @@ from pathlib import Path
 
 import numpy as np
 
-from leadthrough.experiments.demo import DemoResult, path_smoothness, teaching_actions
+from leadthrough.experiments.demo import (
+    DemoResult,
+    hand_force_rms,
+    path_smoothness,
+    teaching_actions,
+)
 from leadthrough.model.description import RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.plots import pyplot
@@ -116,8 +121,7 @@ def _markdown(result: DemoResult, picture: str, robot: RobotDescription) -> str:
     errors, sim = result.replay_error, result.taught
     smooth = path_smoothness(sim, teaching_actions(robot))
     passive = path_smoothness(result.passive, teaching_actions(robot))
-    force, passive_force = (np.sqrt(np.mean(run.operator_force**2))
-                            for run in (sim, result.passive))  # fmt: skip
+    force, passive_force = hand_force_rms(sim), hand_force_rms(result.passive)
     events = [e for e in result.events if e[1] not in ("mode",)]
     event_lines = "\n".join(f"| {t:.2f} | {kind} | {detail} |" for t, kind, detail in events[:20])
     seconds = ", ".join(f"{name} {value:.1f} s" for name, value in result.seconds.items())

@@ -192,7 +192,12 @@ def _identify(robot: RobotDescription, seed: int, random_friction: bool) -> Fric
 
 
 def _demo(robot: RobotDescription, out: Path, numbers: dict[str, str]) -> Path:
-    from leadthrough.experiments.demo import path_smoothness, run_demo, teaching_actions
+    from leadthrough.experiments.demo import (
+        hand_force_rms,
+        path_smoothness,
+        run_demo,
+        teaching_actions,
+    )
     from leadthrough.experiments.demo_report import write_report
 
     start = time.perf_counter()
@@ -205,8 +210,8 @@ def _demo(robot: RobotDescription, out: Path, numbers: dict[str, str]) -> Path:
         "demo.joint_max_mrad": f"{1e3 * errors['joint_max']:.0f}",
         "demo.tool_rms_mm": _f(1e3 * errors["tool_rms"]),
         "demo.tool_max_mm": f"{1e3 * errors['tool_max']:.1f}",
-        "demo.force_rms_n": _f(float(np.sqrt(np.mean(sim.operator_force**2)))),
-        "demo.passive_force_rms_n": _f(float(np.sqrt(np.mean(result.passive.operator_force**2)))),
+        "demo.force_rms_n": _f(hand_force_rms(sim)),
+        "demo.passive_force_rms_n": _f(hand_force_rms(result.passive)),
     }
     smooth = path_smoothness(sim, teaching_actions(robot))
     numbers |= {f"demo.vibration_{key}_mm_s": _f(1e3 * value) for key, value in smooth.items()}
