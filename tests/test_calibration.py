@@ -74,6 +74,28 @@ def test_unknown_payload_is_found_and_held(yumi):
     assert np.max(np.abs(sagging.q_true[-1] - sagging.q_true[0])) > 0.05
 
 
+def test_the_payload_allowed_scales_with_the_arm(yumi):
+    """Half the arm's moving mass, unless ``max_payload`` says otherwise.
+
+    A fixed 2 kg (before) was four times the YuMi's rated payload and refused a UR10e's
+    calibration with a 5 kg tool; the share still refuses 3 kg on the YuMi.
+    """
+    ur10e = lt.robots.ur10e()
+    assert CalibrationParameters().payload_limit(yumi) == pytest.approx(0.5 * yumi.total_mass)
+    assert CalibrationParameters().payload_limit(ur10e) > 14.0
+    assert CalibrationParameters(max_payload=1.0).payload_limit(ur10e) == 1.0
+    tool = ModelError(mass_error=0.05, com_error=0.005, payload=Payload(5.0, (0.0, 0.0, 0.0)))
+    controller, _twin, sim = calibrated(ur10e, TwinConfig(model_error=tool, seed=1), seconds=4.0)
+    assert controller.calibration.accepted
+    assert controller.calibration.payload == pytest.approx(5.0, rel=0.1)
+    settled = sim.t > 1.5
+    assert np.max(np.abs(sim.q_true[settled] - sim.q_true[settled][0])) < 1e-3
+    heavy = dataclasses.replace(MASSES_OFF, payload=Payload(3.0, (0.0, 0.0, 0.0)))
+    controller, _twin, _sim = calibrated(yumi, TwinConfig(model_error=heavy, seed=1))
+    assert not controller.calibration.accepted
+    assert "kg allowed: was the arm touched?" in controller.calibration.reason
+
+
 def test_friction_far_above_the_model_is_measured_not_refused(yumi):
     """A sampled plant whose joint 3 reads 1.6× the model (level, position, drive gain).
 

@@ -119,6 +119,12 @@ _MEASURED = 0.125
 _DISTURBED = 4.0
 
 
+#: Heaviest payload a calibration may report by default, relative to the arm's moving mass
+#: [–]: the largest payload-to-weight ratio of today's collaborative arms (UR16e 16 / 33 kg,
+#: LBR iiwa 14 14 / 30 kg, Kinova Gen3 4 / 8.2 kg; the UR10e 0.37, the Panda 0.17).
+PAYLOAD_SHARE = 0.5
+
+
 @dataclass(frozen=True)
 class CalibrationParameters:
     """The calibration motion and what it accepts.
@@ -145,7 +151,10 @@ class CalibrationParameters:
             travel), while the Panda's runaway went 2.8 → 6.5 rad/s within 32 ms. At 1 rad/s
             (before) dry #1 was 6 % from a refused calibration, and refused on the wider
             families. A joint that moves far trips the 4-stroke check at any speed.
-        max_payload: Heaviest payload the calibration may report [kg].
+        max_payload: Heaviest payload the calibration may report [kg]; None: the arm's
+            own moving mass times :data:`PAYLOAD_SHARE` (:meth:`payload_limit`), since a
+            fixed number is one arm's: 2 kg is four times the YuMi's rated payload and a
+            sixth of a UR10e's, whose calibration with a tool it refused.
         max_friction_change: Largest change of a Coulomb level it may report, a factor
             either way [–]: a level measured outside [1 / (1 + c), 1 + c] times the model's
             refuses the calibration (:func:`implausible_friction`). The errors a measured
@@ -184,17 +193,19 @@ class CalibrationParameters:
     settle_time: float = 0.1
     bandwidth: float = 6.0
     max_speed: float = 2.0
-    max_payload: float = 2.0
+    max_payload: float | None = None
     max_friction_change: float = 0.85
     friction_accuracy: float = 0.2
     max_torque_offset: float = 0.05
     level_slope: float | None = 0.3
 
     def __post_init__(self) -> None:
-        names = ("stroke", "speed", "bandwidth", "max_speed", "max_payload",
-                 "max_friction_change", "friction_accuracy", "max_torque_offset")  # fmt: skip
+        names = ("stroke", "speed", "bandwidth", "max_speed", "max_friction_change",
+                 "friction_accuracy", "max_torque_offset")  # fmt: skip
         for name in names:
             real(name, getattr(self, name), minimum=0.0, strict=True, error=ParameterError)
+        if self.max_payload is not None:
+            real("max_payload", self.max_payload, minimum=0.0, strict=True, error=ParameterError)
         real("settle_time", self.settle_time, minimum=0.0, error=ParameterError)
         if self.level_slope is not None:
             real("level_slope", self.level_slope, minimum=0.0, error=ParameterError)
@@ -202,6 +213,16 @@ class CalibrationParameters:
             raise ParameterError("cycles", f"must be a whole number >= 1, got {self.cycles!r}")
         if self.max_speed <= self.speed:
             raise ParameterError("max_speed", f"must exceed the speed {self.speed:g} rad/s")
+
+    def payload_limit(self, robot: RobotDescription) -> float:
+        """Heaviest payload the calibration may report on ``robot`` [kg].
+
+        ``max_payload``, or without one the arm's moving mass (its links') times
+        :data:`PAYLOAD_SHARE`: the YuMi 2.6 kg, the Panda 8.4 kg, the UR10e 14 kg.
+        """
+        if self.max_payload is not None:
+            return self.max_payload
+        return PAYLOAD_SHARE * robot.total_mass
 
     @property
     def frequency(self) -> float:
@@ -572,9 +593,10 @@ class CalibrationRun:
                                  offset)  # fmt: skip
         per_kilogram = self.payload_regressor(self.pose)
         payload = self.payload(gravity_error, per_kilogram, slid)
-        if payload > p.max_payload:
+        allowed = p.payload_limit(self.dynamics.robot)
+        if payload > allowed:
             return self._refused(f"a payload of {payload:.2f} kg is more than the "
-                                 f"{p.max_payload:g} kg allowed: was the arm touched?", scale,
+                                 f"{allowed:.3g} kg allowed: was the arm touched?", scale,
                                  measured, offset)  # fmt: skip
         bias = np.where(slid, gravity_error + payload * per_kilogram, 0.0)
         spread = np.where(measured, 0.5 * np.hypot(_scatter(plus), _scatter(minus)), 0.0)
