@@ -102,6 +102,28 @@ def test_given_drive_data_are_not_assumed(tmp_path):
     np.testing.assert_array_equal(robot.home(), [0.1, 0.2, 1.0])
 
 
+def test_continuous_joints_and_a_singular_home_are_stated(robots_dir, tmp_path):
+    """The Kinova's continuous joints get ±2π, its assumed home points straight up: both named.
+
+    Drive data with ``lower``, ``upper`` and a home away from the singularity silence both.
+    """
+    path = robots_dir / "kinova_description/robots/kinova.urdf"
+    robot, caught = quietly(lt.robots.from_urdf, path, tip="j2s6s200_end_effector")
+    message = str(caught[0].message)
+    assert len(caught) == 1
+    assert "continuous joint(s) j2s6s200_joint_1, j2s6s200_joint_4, j2s6s200_joint_6" in message
+    assert "is near a singularity" in message
+    drive = tmp_path / "kinova.toml"
+    drive.write_text("lower = [-3.0, 0.9, 0.4, -3.0, 0.6, -3.0]\n"
+                     "upper = [3.0, 5.4, 5.9, 3.0, 5.7, 3.0]\n"
+                     "home = [0.0, 2.9, 1.3, -2.1, 1.4, 1.3]\n")  # fmt: skip
+    robot, caught = quietly(lt.robots.from_urdf, path, tip="j2s6s200_end_effector",
+                            drive_data=drive)  # fmt: skip
+    message = str(caught[0].message)
+    assert "continuous" not in message and "singular" not in message and "home" not in message
+    np.testing.assert_allclose(robot.q_max, [3.0, 5.4, 5.9, 3.0, 5.7, 3.0])
+
+
 @pytest.mark.parametrize(
     ("text", "key"),
     [

@@ -124,10 +124,44 @@ def test_panda_without_tip_is_not_a_serial_chain(robots_dir):
 
 
 def test_unknown_tip_is_named(robots_dir):
-    """An unknown tip fails with an error naming the tip."""
+    """An unknown tip fails with an error naming the tip, and the frames it may mean."""
     error = _error(robots_dir / UR5, tip="no_such_link")
     assert "'no_such_link'" in str(error)
     assert error.field == "tip"
+    assert "did you mean 'tool0'" in str(_error(robots_dir / UR5, tip="tool"))
+
+
+KINOVA = "kinova_description/robots/kinova.urdf"
+
+
+def test_continuous_joints_load_as_one_turn_either_way(robots_dir):
+    """The Kinova's continuous joints 1, 4, 6: ±2π, and the dynamics Pinocchio's own.
+
+    The reference is Pinocchio's model of the unmodified URDF, whose continuous joints
+    take (cos θ, sin θ) as their configuration.
+    """
+    path = robots_dir / KINOVA
+    robot = lt.robots.from_urdf(path, tip="j2s6s200_end_effector")
+    continuous = [0, 3, 5]
+    np.testing.assert_allclose(robot.q_min[continuous], -2.0 * np.pi)
+    np.testing.assert_allclose(robot.q_max[continuous], 2.0 * np.pi)
+    model = pin.buildModelFromUrdf(str(path))
+    locked = [i for i in range(1, model.njoints) if not model.names[i].startswith("j2s6s200_joint")]
+    model = pin.buildReducedModel(model, locked, pin.neutral(model))
+    model.armature = np.zeros(model.nv)
+    data = model.createData()
+    no_rotors = lt.robots.from_urdf(path, tip="j2s6s200_end_effector",
+                                    rotor_inertias=[0.0] * 6)  # fmt: skip
+    dynamics = lt.Dynamics(no_rotors)
+    for q in np.random.default_rng(3).uniform(robot.q_min, robot.q_max, (5, 6)):
+        configuration = np.concatenate([
+            [np.cos(angle), np.sin(angle)] if joint.nq == 2 else [angle]
+            for angle, joint in zip(q, model.joints[1:], strict=True)
+        ])  # fmt: skip
+        reference = pin.computeGeneralizedGravity(model, data, configuration)
+        np.testing.assert_allclose(dynamics.gravity(q), reference, atol=1e-9)
+        upper = np.triu(pin.crba(model, data, configuration))
+        np.testing.assert_allclose(dynamics.mass(q), upper + np.triu(upper, 1).T, atol=1e-9)
 
 
 MALFORMED = [
@@ -202,7 +236,7 @@ def test_prismatic_joint_in_chain_is_named(tmp_path):
     error = _error(path)
     assert "slide" in error.field
     assert "hinge" not in str(error)
-    assert "only revolute joints" in error.reason
+    assert "only revolute joints are supported, got a prismatic joint" in error.reason
 
 
 @pytest.mark.parametrize(

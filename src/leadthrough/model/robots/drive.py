@@ -18,6 +18,11 @@ viscous c           0.02 s/rad · τ_max [Nm s/rad]          YuMi 0.003…0.037,
 home pose           0 where 0 is ≥ 10 % of the range       —
                     inside the limits, else mid-range
 ==================  =====================================  ==================================
+
+A home pose, given or assumed, at which the tool cannot move in every direction (the
+smallest singular value of its translational Jacobian below :data:`SINGULAR_HOME` of the
+largest, e.g. an arm pointing straight up) is named in the same warning: the operator
+grabs the arm there first.
 """
 
 from __future__ import annotations
@@ -25,6 +30,7 @@ from __future__ import annotations
 import dataclasses
 import tomllib
 import warnings
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -59,9 +65,14 @@ ASSUMED_SLOPE, ASSUMED_HALF_WIDTH, ASSUMED_NOISE_FRACTION = 5e3, 2e-3, 0.05
 #: The zero reading is home for a joint if it is this fraction of the range inside.
 HOME_MARGIN = 0.1
 
+#: A home whose tool Jacobian's singular values differ by more than this is near a
+#: singularity, when they do not elsewhere in the limits [–]: there a hand's push along
+#: the weak direction barely moves the arm.
+SINGULAR_HOME = 0.05
+
 _FRICTION_KEYS = ("coulomb", "viscous", "slope", "half_width", "noise_std")
 _DRIVE_KEYS = ("gear_ratio", "rotor_inertia", "torque_constant")
-_ALL_KEYS = (*_DRIVE_KEYS, *_FRICTION_KEYS, "home", "assumed")
+_ALL_KEYS = (*_DRIVE_KEYS, *_FRICTION_KEYS, "lower", "upper", "home", "assumed")
 #: What a drive data file or an argument can supply (``friction`` as a whole).
 QUANTITIES = ("gear_ratio", "rotor_inertia", "friction", "home")
 
@@ -103,9 +114,10 @@ def with_drive_data(robot: RobotDescription, path: str | Path) -> RobotDescripti
 
     Keys (all optional): ``gear_ratio``, ``rotor_inertia`` [kg m², motor side],
     ``torque_constant`` [Nm/A, arm side], friction ``coulomb`` [Nm], ``viscous``
-    [Nm s/rad], ``slope`` [s/rad], ``half_width`` [rad/s], ``noise_std`` [Nm], and
-    ``home`` [rad]. Each list has one value per joint, base first. ``assumed`` lists
-    (as short strings) what the file itself assumes, named by :func:`complete_drive_data`.
+    [Nm s/rad], ``slope`` [s/rad], ``half_width`` [rad/s], ``noise_std`` [Nm], position
+    limits ``lower`` and ``upper`` [rad], and ``home`` [rad]. Each list has one value per
+    joint, base first. ``assumed`` lists (as short strings) what the file itself assumes,
+    named by :func:`complete_drive_data`.
 
     Raises:
         RobotDescriptionError: The file is unreadable, a list has the wrong length or a
@@ -122,6 +134,7 @@ def complete_drive_data(
     robot: RobotDescription,
     missing: set[str],
     drive_data: str | Path | None = None,
+    limit_notes: Sequence[str] = (),
 ) -> RobotDescription:
     """``robot`` with ``drive_data`` applied and what is still ``missing`` assumed.
 
@@ -130,10 +143,13 @@ def complete_drive_data(
             placeholders (e.g. a URDF's gear ratio 1 and rotor inertia 0).
         missing: Quantities the description does not know.
         drive_data: Drive data TOML file (see :func:`with_drive_data`), or None.
+        limit_notes: Position limits the caller assumed (e.g. of continuous joints),
+            stated in the warning unless the drive data give ``lower`` and ``upper``.
 
     Warns:
         AssumedDriveDataWarning: Once, naming every quantity assumed (by this function
-            or by the drive data file's ``assumed`` list) and the assumed values.
+            or by the drive data file's ``assumed`` list) and the assumed values, and a
+            home near a singularity (:data:`SINGULAR_HOME`).
     """
     assumed_by_file: list[str] = []
     if drive_data is not None:
@@ -141,12 +157,16 @@ def complete_drive_data(
         robot = _apply(robot, data)
         assumed_by_file = list(data.get("assumed", []))
         missing = missing - _supplied(data)
+        if "lower" in data and "upper" in data:
+            limit_notes = ()
     robot, notes = _assume(robot, missing)
+    notes = [*limit_notes, *notes]
     if assumed_by_file:
         notes.append(f"{', '.join(assumed_by_file)} (stated in {Path(str(drive_data)).name})")
-    if notes:
-        message = f"{robot.name}: drive data assumed (no public numbers): " + "; ".join(notes)
-        warnings.warn(message, AssumedDriveDataWarning, stacklevel=3)
+    parts = ["drive data assumed (no public numbers): " + "; ".join(notes)] if notes else []
+    parts += _singular_home(robot)
+    if parts:
+        warnings.warn(f"{robot.name}: " + "; ".join(parts), AssumedDriveDataWarning, stacklevel=3)
     return robot
 
 
@@ -163,7 +183,11 @@ def _apply(robot: RobotDescription, data: dict[str, Any]) -> RobotDescription:
         changed = {key: float(data[key][i]) for key in _FRICTION_KEYS if key in data}
         friction = dataclasses.replace(joint.friction, **changed)
         drive: dict[str, Any] = {key: float(data[key][i]) for key in _DRIVE_KEYS if key in data}
-        joints.append(dataclasses.replace(joint, friction=friction, **drive))
+        lower, upper = joint.position_limits
+        limits = (float(data.get("lower", [lower] * robot.n_joints)[i]),
+                  float(data.get("upper", [upper] * robot.n_joints)[i]))  # fmt: skip
+        joints.append(dataclasses.replace(joint, friction=friction, position_limits=limits,
+                                          **drive))  # fmt: skip
     home = np.array(data["home"], dtype=float) if "home" in data else robot.home_position
     return dataclasses.replace(robot, joints=tuple(joints), home_position=home)
 
@@ -194,6 +218,32 @@ def _assume(robot: RobotDescription, missing: set[str]) -> tuple[RobotDescriptio
         home = _assumed_home(robot.q_min, robot.q_max)
         notes.append(f"home {_values(home)} rad")
     return dataclasses.replace(robot, joints=tuple(joints), home_position=home), notes
+
+
+def _singular_home(robot: RobotDescription) -> list[str]:
+    """A note if the tool moves in fewer directions at home than the arm allows (else none).
+
+    The smallest over the largest singular value of the tool's translational Jacobian,
+    at home against its median over poses drawn within the limits: an arm that cannot
+    move its tool in three directions anywhere (three joints, a tool on the last axis) is
+    not near a singularity at home.
+    """
+    from leadthrough.model.dynamics import Dynamics  # the model's kinematics (Pinocchio)
+
+    dynamics = Dynamics(robot)
+
+    def spread(q: np.ndarray) -> tuple[float, np.ndarray]:
+        values = np.linalg.svd(dynamics.jacobian(q)[:3], compute_uv=False)
+        return float(values[-1] / max(values[0], 1e-12)), values
+
+    poses = np.random.default_rng(0).uniform(robot.q_min, robot.q_max, (16, robot.n_joints))
+    typical = float(np.median([spread(q)[0] for q in poses]))
+    at_home, values = spread(robot.home())
+    if not at_home < SINGULAR_HOME <= typical:
+        return []
+    return [f"the home {_values(robot.home())} rad is near a singularity (the tool's "
+            f"Jacobian's singular values {_values(values)} m/rad): give one in the drive "
+            "data (home), where the operator grabs the arm first"]  # fmt: skip
 
 
 def _with_gear(joint: Joint, gear: float) -> Joint:

@@ -7,12 +7,18 @@ it. URDF carries no gear ratios, rotor inertias, friction sigmoids or home pose:
 come from the arguments, a drive data file, the URDF ``<dynamics friction damping>``
 (as Coulomb level and viscous coefficient, when any is non-zero), and what is still
 missing is assumed with one warning naming it (:mod:`leadthrough.model.robots.drive`).
+A continuous joint (a UR's or a Kinova's) becomes a revolute one of
+:data:`CONTINUOUS_LIMIT` either way (one turn, as UR's controllers limit theirs), stated in
+that warning; drive data ``lower`` and ``upper`` set other limits.
 """
 
 from __future__ import annotations
 
+import difflib
+import math
 from collections.abc import Sequence
 from pathlib import Path
+from xml.etree import ElementTree
 
 import numpy as np
 import pinocchio as pin
@@ -34,6 +40,13 @@ _REVOLUTE = {
     "JointModelRY": np.array([0.0, 1.0, 0.0]),
     "JointModelRZ": np.array([0.0, 0.0, 1.0]),
 }
+
+#: Position limit given to a continuous (unbounded) joint either way from zero [rad].
+CONTINUOUS_LIMIT = 2.0 * math.pi
+#: Pinocchio's joint models that are not revolute, by what a URDF calls them.
+_OTHER_KINDS = {"JointModelPX": "prismatic", "JointModelPY": "prismatic",
+                "JointModelPZ": "prismatic", "JointModelPrismaticUnaligned": "prismatic",
+                "JointModelFreeFlyer": "floating", "JointModelPlanar": "planar"}  # fmt: skip
 
 #: Sigmoid shape given to URDF friction, which has no such parameters (Table 4.1 values).
 DEFAULT_SLOPE = 5e3
@@ -76,8 +89,9 @@ def from_urdf(
     if not Path(path).is_file():
         raise RobotDescriptionError(source, "", "no such file")
     try:
-        full = pin.buildModelFromUrdf(source)
-    except (ValueError, RuntimeError) as error:
+        text, continuous = bounded_continuous_joints(Path(path).read_text(encoding="utf-8"))
+        full = pin.buildModelFromXML(text)
+    except (ValueError, RuntimeError, UnicodeDecodeError) as error:
         raise RobotDescriptionError(source, "", f"not a valid URDF ({error})") from None
     with within("", source=source):
         chain_ids, tip_frame = _chain(full, tip)
@@ -90,14 +104,48 @@ def from_urdf(
     missing |= {"rotor_inertia"} if rotor_inertias is None else set()
     urdf_friction = any(joint.friction.coulomb > 0.0 for joint in robot.joints)
     missing |= {"friction"} if friction is None and not urdf_friction else set()
-    return complete_drive_data(robot, missing, drive_data)
+    unbounded = [name for name in robot.joint_names if name in continuous]
+    notes = [f"position limits ±{CONTINUOUS_LIMIT:.3g} rad of the continuous joint(s) "
+             f"{', '.join(unbounded)}"] if unbounded else []  # fmt: skip
+    return complete_drive_data(robot, missing, drive_data, notes)
+
+
+def bounded_continuous_joints(text: str) -> tuple[str, set[str]]:
+    """URDF ``text`` with each continuous joint made revolute within ±:data:`CONTINUOUS_LIMIT`.
+
+    Its ``<limit>`` keeps its effort and velocity (a URDF's continuous joint ignores
+    ``lower`` and ``upper``). Returns the text and the names of the joints changed;
+    unchanged text when there are none.
+
+    Raises:
+        ValueError: ``text`` is not XML.
+    """
+    try:
+        root = ElementTree.fromstring(text)
+    except ElementTree.ParseError as error:
+        raise ValueError(str(error)) from None
+    continuous = [joint for joint in root.iter("joint") if joint.get("type") == "continuous"]
+    if not continuous:
+        return text, set()
+    for joint in continuous:
+        joint.set("type", "revolute")
+        limit = joint.find("limit")
+        if limit is None:
+            limit = ElementTree.SubElement(joint, "limit")
+        limit.set("lower", f"{-CONTINUOUS_LIMIT!r}")
+        limit.set("upper", f"{CONTINUOUS_LIMIT!r}")
+    names = {str(joint.get("name")) for joint in continuous}
+    return ElementTree.tostring(root, encoding="unicode"), names
 
 
 def _chain(model: pin.Model, tip: str | None) -> tuple[list[int], str | None]:
     """Joint ids from the root to ``tip`` (or of the only chain when ``tip`` is None)."""
     if tip is not None:
         if not model.existFrame(tip):
-            raise RobotDescriptionError("", "tip", f"no link or frame named {tip!r}")
+            known = [frame.name for frame in model.frames]
+            close = difflib.get_close_matches(tip, known, n=3, cutoff=0.5)
+            hint = f"; did you mean {', '.join(map(repr, close))}?" if close else ""
+            raise RobotDescriptionError("", "tip", f"no link or frame named {tip!r}{hint}")
         joint_id = model.frames[model.getFrameId(tip)].parentJoint
     else:
         joint_id = _single_leaf(model)
@@ -169,11 +217,11 @@ def _joint(
         axis = _REVOLUTE[kind]
     elif kind == "JointModelRevoluteUnaligned":
         axis = np.array(joint_model.extract().axis)
-    elif kind.startswith("JointModelRUB"):
-        reason = "continuous (unbounded) joint: give it <limit lower upper> as a revolute joint"
-        raise RobotDescriptionError("", "type", reason)
     else:
-        raise RobotDescriptionError("", "type", f"only revolute joints are supported, got {kind}")
+        what = _OTHER_KINDS.get(kind, kind)
+        raise RobotDescriptionError("", "type", f"only revolute joints are supported, got a "
+                                                f"{what} joint (make it fixed in the URDF, or end "
+                                                "the arm before it: tip=)")  # fmt: skip
     v = joint_model.idx_v
     inertia = model.inertias[joint_id]
     if friction is None:
