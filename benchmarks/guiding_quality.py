@@ -18,6 +18,7 @@ Usage:
     python benchmarks/guiding_quality.py [--cases quick] [--save out.json] [--compare old.json]
         [--factory module:function]   (the active controller: function(robot, mode))
         [--robot NAME] [--seeds 5-8]  (another arm; plants not developed on)
+        [--robot FILE --tip LINK --drive-data FILE]  (an arm of your own: a URDF or TOML)
         [--hands soft,firm]           (other hands of guiding.HANDS: 100 and 1000 N/m)
         [--uncalibrated]              (both modes without the start-up calibration)
         [--plants FIELD=VALUE ...]    (another family: twin.plants.PlantRanges fields, e.g.
@@ -37,7 +38,7 @@ import sys
 import time
 from dataclasses import asdict, fields, replace
 
-from leadthrough.errors import ParameterError
+from leadthrough.errors import ParameterError, RobotDescriptionError
 from leadthrough.experiments.guiding import (
     BENCHMARK_HANDS,
     DIAGNOSTICS,
@@ -96,6 +97,23 @@ def uncalibrated_line(results: dict[str, dict[str, float]]) -> str:
     )
 
 
+def saturated_line(results: dict[str, dict[str, float]]) -> str:
+    """The cases whose hand could not pull the arm along its path, or "" when none.
+
+    Its force reached the hand's limit (``guiding.SATURATED``): the path left the arm's
+    reach from its home pose, or met a singularity; such a case measures the arm's
+    workspace, not its controller (e.g. the 20 cm upward line of a smaller arm).
+    """
+    stuck = [name for name, f in results.items() if f.get("hand_saturated")]
+    if not stuck:
+        return ""
+    listed = ", ".join(stuck[:3]) + (", …" if len(stuck) > 3 else "")
+    return (
+        f"the hand saturated (path out of reach or through a singularity): {len(stuck)} "
+        f"of {len(results)} cases ({listed}); their figures measure the workspace"
+    )
+
+
 def parse_seeds(text: str) -> list[int]:
     """``"5-8"`` → [5, 6, 7, 8]; ``"5,9"`` → [5, 9]."""
     seeds: list[int] = []
@@ -140,7 +158,12 @@ def plant_ranges(settings: list[str] | None) -> PlantRanges:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", choices=("full", "quick"), default="full")
-    parser.add_argument("--robot", default="yumi", help="a registered robot (default yumi)")
+    parser.add_argument(
+        "--robot", default="yumi", help="a registered robot or a URDF / TOML file (default yumi)"
+    )
+    parser.add_argument("--tip", help="flange link of a URDF (needed when the tree branches)")
+    parser.add_argument("--drive-data", help="drive data TOML of a URDF (gear ratios, "
+                        "friction, home, ...; see lt.robots.from_urdf)")  # fmt: skip
     parser.add_argument(
         "--uncalibrated",
         action="store_true",
@@ -208,6 +231,10 @@ def main(argv: list[str] | None = None) -> None:
         TwinConfig(control_dt=args.dt)  # a period the twin can run
     except (ParameterError, TwinError) as error:
         parser.error(f"--dt: {error}")
+    try:
+        robot = robots.load(args.robot, tip=args.tip, drive_data=args.drive_data)
+    except RobotDescriptionError as error:
+        parser.error(str(error))
     total, start = len(cases(args.cases, seeds, hands, ranges)), time.perf_counter()
 
     def report(name: str, figures: dict[str, float]) -> None:
@@ -219,7 +246,7 @@ def main(argv: list[str] | None = None) -> None:
 
     reported: list[str] = []
     print(HEADER)
-    results, stats = evaluate(args.cases, factory, robots.load(args.robot), report, seeds,
+    results, stats = evaluate(args.cases, factory, robot, report, seeds,
                               passive_factory, hands, ranges)  # fmt: skip
     old = None
     if args.compare:
@@ -227,6 +254,9 @@ def main(argv: list[str] | None = None) -> None:
             old = json.load(handle)["summary"]
     print_summary(stats, old)
     print(uncalibrated_line(results))
+    saturated = saturated_line(results)
+    if saturated:
+        print(saturated)
     if args.save:
         with open(args.save, "w") as handle:
             json.dump({"cases": results, "summary": stats, "family": asdict(ranges)}, handle,

@@ -97,3 +97,38 @@ def test_identified_first_builds_the_default_controllers_only(capsys):
         .splitlines()[-1]
         .endswith("--identified builds the default controllers: drop --factory")
     )
+
+
+def test_cases_whose_hand_saturated_are_named():
+    """A hand that could not pull the arm along its path is named below the table."""
+    results = {"dry#1 stiff upwards": {"hand_saturated": 1.0},
+               "dry#1 relaxed upwards": {"hand_saturated": 0.0}}  # fmt: skip
+    line = guiding_quality.saturated_line(results)
+    assert line.startswith("the hand saturated") and "1 of 2 cases (dry#1 stiff upwards)" in line
+    assert guiding_quality.saturated_line({"x": {"hand_saturated": 0.0}}) == ""
+
+
+def test_a_path_out_of_reach_saturates_the_hand(robots_dir):
+    """The SO-101's upward line ends 3 cm beyond its reach: the stiff hand saturates there.
+
+    The YuMi's, inside its reach, does not.
+    """
+    import warnings
+
+    import leadthrough as lt
+    from leadthrough.experiments.guiding import Case, run_case
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", lt.robots.AssumedDriveDataWarning)
+        so101 = lt.robots.load(robots_dir / "so_arm_description/urdf/so101.urdf",
+                               tip="gripper_frame_link")  # fmt: skip
+    case = Case("dry", 1, "stiff", "upwards")
+    assert run_case(case, "passive", robot=so101).hand_saturated
+    assert not run_case(case, "passive").hand_saturated
+
+
+def test_an_unknown_tip_is_a_one_line_error(capsys):
+    """``--robot FILE --tip`` that names no link: the parser's one-line error."""
+    with pytest.raises(SystemExit):
+        guiding_quality.main(["--robot", "ur5", "--tip", "tool0"])
+    assert "a shipped robot takes no tip" in capsys.readouterr().err.strip().splitlines()[-1]

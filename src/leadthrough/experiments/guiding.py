@@ -38,7 +38,7 @@ from leadthrough.model.dynamics import Dynamics
 from leadthrough.runtime.excitation import friction_experiment
 from leadthrough.runtime.interface import JointState
 from leadthrough.runtime.loop import stepper
-from leadthrough.twin.operator import During, Hand
+from leadthrough.twin.operator import During, Hand, HandParameters
 from leadthrough.twin.paths import Circle, Line, Path
 from leadthrough.twin.plants import PlantRanges, sample_plant
 from leadthrough.twin.runner import SimulationResult, simulate
@@ -66,6 +66,9 @@ HOLD = 2.0  # [s] of holding the end pose after the path
 REST = 10.0  # [s] after the release (plus 0.5 s to stop)
 VIBRATION_CUTOFF = 4.0  # [Hz]
 MOVING_SPEED = 0.01  # [rad/s] a joint slower than this has stopped
+#: A hand whose force reached this share of its limit could not pull the arm along its
+#: path (out of reach, a singularity): the case measures the limit, not the controller.
+SATURATED = 0.99
 
 
 @dataclass(frozen=True)
@@ -118,6 +121,8 @@ class CaseResult:
         observer_std: Median std over the joint's peak operator torque, mean over joints [–].
         calibrated: Whether the controller's start-up calibration succeeded in the hold run
             (True when the controller has none to report).
+        hand_saturated: Whether the hand's force reached its limit in the hold run
+            (:data:`SATURATED`): the path left the arm's reach or met a singularity.
     """
 
     case: Case
@@ -135,6 +140,7 @@ class CaseResult:
     observer_coverage: float
     observer_std: float
     calibrated: bool = True
+    hand_saturated: bool = False
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary."""
@@ -357,6 +363,7 @@ def run_case(
         observer_coverage=observer.coverage,
         observer_std=observer.std,
         calibrated=_calibrated(recorder.controller),
+        hand_saturated=bool(held.operator_force.max() >= SATURATED * HandParameters.max_force),
     )
 
 
@@ -530,6 +537,7 @@ def figures(passive: CaseResult, active: CaseResult) -> dict[str, float]:
         "obs_std": active.observer_std,
         "max_joint_speed": active.max_joint_speed,
         "calibrated": float(active.calibrated),
+        "hand_saturated": float(passive.hand_saturated or active.hand_saturated),
         "force_passive": passive.rms_force,
         "force_active": active.rms_force,
         "vibration_passive": passive.vibration,
