@@ -89,7 +89,7 @@ def from_urdf(
     if not Path(path).is_file():
         raise RobotDescriptionError(source, "", "no such file")
     try:
-        text, continuous = bounded_continuous_joints(Path(path).read_text(encoding="utf-8"))
+        text, continuous = _bounded_continuous_joints(Path(path).read_text(encoding="utf-8"))
         full = pin.buildModelFromXML(text)
     except (ValueError, RuntimeError, UnicodeDecodeError) as error:
         raise RobotDescriptionError(source, "", f"not a valid URDF ({error})") from None
@@ -110,7 +110,7 @@ def from_urdf(
     return complete_drive_data(robot, missing, drive_data, notes)
 
 
-def bounded_continuous_joints(text: str) -> tuple[str, set[str]]:
+def _bounded_continuous_joints(text: str) -> tuple[str, set[str]]:
     """URDF ``text`` with each continuous joint made revolute within ±:data:`CONTINUOUS_LIMIT`.
 
     Its ``<limit>`` keeps its effort and velocity (a URDF's continuous joint ignores
