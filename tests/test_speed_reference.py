@@ -32,7 +32,9 @@ calibration reading the torque measurement's offset and taking it off
 (``Calibration.torque_offset``), then active mode's compensation following the push once
 a start-up calibration has been accepted (``CoulombCompensationParameters.follow_push``),
 then the calibration reading the momentum balance over each stretch a joint slides at pace
-(``calibration.sliding_readings``). A faster step must reproduce them.
+(``calibration.sliding_readings``), then the drives' torque ripple in each joint's band, which
+the joints read together weigh (``LeadThroughParameters.torque_ripple``). A faster step must
+reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

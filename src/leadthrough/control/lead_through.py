@@ -109,6 +109,9 @@ class LeadThrough:
             raise ParameterError("calibrate", "True needs parameters.calibration (it is None)")
         self.parameters = parameters
         self._gravity_std = parameters.gravity_std  # [–], a property: read once
+        #: the std of the drives' ripple on the torque of the last period [Nm] (joint_std)
+        self._ripple_std = np.zeros(robot.n_joints)
+        self._ripple_share = parameters.torque_ripple / math.sqrt(2.0)
         self.robot = robot
         self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
         #: which joints' friction levels were measured on this arm: all of a given model's
@@ -194,15 +197,16 @@ class LeadThrough:
     def joint_std(self) -> FloatArray:
         """How far each joint's own estimate (``observer.tau_ext_hat``) may be off [Nm].
 
-        The model's two errors at the latest sample, independent: the friction model's
+        The model's three errors at the latest sample, independent: the friction model's
         (the observer's ``error_std``; large at rest, where a push below breakaway is
-        unseen; each level's error the law's, ``law.friction_error``) and the gravity
-        model's, ``parameters.gravity_std · |G(q) − G_cal|``
+        unseen; each level's error the law's, ``law.friction_error``), the drives' ripple
+        on the last period's motor torque τ, ``parameters.torque_ripple / √2 · |τ|``, and
+        the gravity model's, ``parameters.gravity_std · |G(q) − G_cal|``
         (G_cal the gravity the calibration measured at its pose on the joints it
         measured, 0 elsewhere and without one: the error the Coulomb compensation's
         ceiling allows for). ``observer.std`` is the filter's own covariance.
         """
-        friction = self.observer.error_std
+        friction = np.hypot(self.observer.error_std, self._ripple_std)
         model = self.model
         if model is None:
             return friction
@@ -504,6 +508,8 @@ class LeadThrough:
         if self.level_error is not None:
             self._follow_level_error(q)
         applied, dither = self._measured(tau_measured)
+        np.multiply(np.abs(applied, out=self._ripple_std), self._ripple_share,
+                    out=self._ripple_std)  # fmt: skip
         self._stage = "observer"
         estimate = self.observer.update(q, qd, applied - dither, model)
         if self.fusion is not None:
