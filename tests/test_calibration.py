@@ -78,7 +78,7 @@ def test_the_payload_allowed_scales_with_the_arm(yumi):
     """Half the arm's moving mass, unless ``max_payload`` says otherwise.
 
     A fixed 2 kg (before) was four times the YuMi's rated payload and refused a UR10e's
-    calibration with a 5 kg tool; the share still refuses 3 kg on the YuMi.
+    calibration with a 5 kg tool; the share accepts 2.3 kg on the YuMi and refuses 3 kg.
     """
     ur10e = lt.robots.ur10e()
     assert CalibrationParameters().payload_limit(yumi) == pytest.approx(0.5 * yumi.total_mass)
@@ -90,6 +90,10 @@ def test_the_payload_allowed_scales_with_the_arm(yumi):
     assert controller.calibration.payload == pytest.approx(5.0, rel=0.1)
     settled = sim.t > 1.5
     assert np.max(np.abs(sim.q_true[settled] - sim.q_true[settled][0])) < 1e-3
+    within = dataclasses.replace(MASSES_OFF, payload=Payload(2.3, (0.0, 0.0, 0.0)))
+    controller, _twin, _sim = calibrated(yumi, TwinConfig(model_error=within, seed=1))
+    assert controller.calibration.accepted  # refused by the fixed 2 kg
+    assert controller.calibration.payload == pytest.approx(2.3, rel=0.1)
     heavy = dataclasses.replace(MASSES_OFF, payload=Payload(3.0, (0.0, 0.0, 0.0)))
     controller, _twin, _sim = calibrated(yumi, TwinConfig(model_error=heavy, seed=1))
     assert not controller.calibration.accepted

@@ -181,15 +181,13 @@ def ripple_std(controller, tau_measured):
 
 
 def test_the_band_carries_the_drives_ripple_on_the_torque_they_carry():
-    """A ripple of amplitude ``r |τ|`` at an unknown phase has the std ``r |τ| / √2``.
+    """A ripple of amplitude ``r |τ|`` at an unknown phase, of std ``r |τ| / √2``.
 
     It adds to the band in quadrature, grows with the motor torque (a joint carrying
     40 Nm ripples 0.8 Nm at 2 %, more than the YuMi's whole friction) and vanishes with
     ``torque_ripple = 0``.
     """
     r = lt.LeadThroughParameters().torque_ripple
-    phases = np.random.default_rng(0).uniform(0.0, 2.0 * np.pi, 200_000)
-    assert np.std(r * 40.0 * np.sin(phases)) == pytest.approx(r * 40.0 / np.sqrt(2.0), rel=0.01)
     robot = lt.robots.yumi()
     q, n = robot.home(), robot.n_joints
     torque = 0.8 * robot.torque_limits * np.where(np.arange(n) % 2, -1.0, 1.0)

@@ -127,8 +127,9 @@ def test_a_path_out_of_reach_saturates_the_hand(robots_dir):
     assert not run_case(case, "passive").hand_saturated
 
 
-def test_an_unknown_tip_is_a_one_line_error(capsys):
-    """``--robot FILE --tip`` that names no link: the parser's one-line error."""
+def test_an_unknown_tip_is_a_one_line_error(robots_dir, capsys):
+    """``--robot FILE.urdf --tip`` that names no link: the parser's one-line error."""
+    urdf = robots_dir / "ur_description/urdf/ur5_robot.urdf"
     with pytest.raises(SystemExit):
-        guiding_quality.main(["--robot", "ur5", "--tip", "tool0"])
-    assert "a shipped robot takes no tip" in capsys.readouterr().err.strip().splitlines()[-1]
+        guiding_quality.main(["--robot", str(urdf), "--tip", "tool"])
+    assert "did you mean 'tool0'?" in capsys.readouterr().err.strip().splitlines()[-1]

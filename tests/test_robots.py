@@ -48,6 +48,7 @@ def test_shipped_robot_warns_once_about_what_it_assumes(name, warns):
     """A shipped arm warns exactly once when some of its drive data are assumed, else never."""
     _, caught = quietly(lt.robots.load, name)
     assert len(caught) == warns
+    assert not any("singularity" in str(warning.message) for warning in caught)
 
 
 def test_ur10e_torque_constants_are_the_published_ones():
@@ -122,6 +123,11 @@ def test_continuous_joints_and_a_singular_home_are_stated(robots_dir, tmp_path):
     message = str(caught[0].message)
     assert "continuous" not in message and "singular" not in message and "home" not in message
     np.testing.assert_allclose(robot.q_max, [3.0, 5.4, 5.9, 3.0, 5.7, 3.0])
+    drive.write_text("lower = [-3.0, 0.9, 0.4, -6.283185307179586, 0.6, -3.0]\n")
+    _, caught = quietly(lt.robots.from_urdf, path, tip="j2s6s200_end_effector",
+                        drive_data=drive)  # fmt: skip
+    message = str(caught[0].message)  # joint 4's limits are still the assumed ones
+    assert "continuous joint(s) j2s6s200_joint_4;" in message
 
 
 @pytest.mark.parametrize(
@@ -139,6 +145,12 @@ def test_bad_drive_data_names_the_file_and_key(tmp_path, text, key):
     drive.write_text(text)
     with pytest.raises(RobotDescriptionError, match=rf"bad\.toml.*{key}"):
         lt.robots.from_urdf(THREE_JOINT, drive_data=drive)
+
+
+def test_a_toml_description_takes_no_tip_or_drive_data():
+    """A TOML file carries its flange and drive data: a tip given with it is an error."""
+    with pytest.raises(RobotDescriptionError, match="takes no tip or drive data"):
+        lt.robots.load(DATA / "yumi_left.toml", tip="flange")
 
 
 def test_unknown_robot_name_lists_the_shipped_ones():

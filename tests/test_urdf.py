@@ -239,6 +239,32 @@ def test_prismatic_joint_in_chain_is_named(tmp_path):
     assert "only revolute joints are supported, got a prismatic joint" in error.reason
 
 
+def test_one_revolute_link_loads(tmp_path):
+    """An arm of one joint loads (its Jacobian is (6, 1), not Pinocchio's (6,))."""
+    text = SLIDER_URDF.format(second="revolute")
+    link2 = text[text.index('  <link name="link2">') : text.index('  <joint name="hinge"')]
+    one = text[: text.index('  <joint name="slide"')].replace(link2, "") + "</robot>\n"
+    path = tmp_path / "one.urdf"
+    path.write_text(one, encoding="utf-8")
+    robot = lt.robots.from_urdf(path)
+    assert robot.n_joints == 1
+    assert lt.Dynamics(robot).jacobian(robot.home()).shape == (6, 1)
+
+
+def test_a_continuous_joint_needs_its_torque_and_speed_limits(tmp_path):
+    """Without ``<limit effort velocity>`` a continuous joint is one error naming it."""
+    text = SLIDER_URDF.format(second="continuous")
+    path = tmp_path / "unlimited.urdf"
+    path.write_text(text.replace('<limit lower="0" upper="0.3" effort="10" velocity="1"/>', ""),
+                    encoding="utf-8")  # fmt: skip
+    error = _error(path)
+    assert "'slide'" in error.field and "<limit effort velocity>" in error.reason
+    path.write_text(text, encoding="utf-8")
+    robot = lt.robots.from_urdf(path)
+    assert robot.joints[1].position_limits == (-2.0 * np.pi, 2.0 * np.pi)
+    assert robot.joints[1].torque_limit == 10.0
+
+
 @pytest.mark.parametrize(
     ("keyword", "values"),
     [

@@ -120,8 +120,12 @@ _DISTURBED = 4.0
 
 
 #: Heaviest payload a calibration may report by default, relative to the arm's moving mass
-#: [–]: the largest payload-to-weight ratio of today's collaborative arms (UR16e 16 / 33 kg,
-#: LBR iiwa 14 14 / 30 kg, Kinova Gen3 4 / 8.2 kg; the UR10e 0.37, the Panda 0.17).
+#: [–]: the largest rated payload over the arm's weight among today's collaborative arms
+#: (UR16e 16 / 33 kg, LBR iiwa 14 14 / 30 kg, Kinova Gen3 4 / 8.2 kg; the UR10e 0.37, the
+#: Panda 0.17), taken of the links' mass, which is a little less than the weight. It is a
+#: plausibility check, not the arm's rating: on a Panda (rated 3 kg) it allows 8.4 kg, so
+#: someone leaning on it by up to ~80 N is read as a payload; set ``max_payload`` to the
+#: rated payload where it is known.
 PAYLOAD_SHARE = 0.5
 
 
@@ -218,7 +222,7 @@ class CalibrationParameters:
         """Heaviest payload the calibration may report on ``robot`` [kg].
 
         ``max_payload``, or without one the arm's moving mass (its links') times
-        :data:`PAYLOAD_SHARE`: the YuMi 2.6 kg, the Panda 8.4 kg, the UR10e 14 kg.
+        :data:`PAYLOAD_SHARE`: the YuMi 2.5 kg, the Panda 8.4 kg, the UR10e 14 kg.
         """
         if self.max_payload is not None:
             return self.max_payload

@@ -109,9 +109,7 @@ class LeadThrough:
             raise ParameterError("calibrate", "True needs parameters.calibration (it is None)")
         self.parameters = parameters
         self._gravity_std = parameters.gravity_std  # [–], a property: read once
-        #: the std of the drives' ripple on the torque of the last period [Nm] (joint_std)
-        self._ripple_std = np.zeros(robot.n_joints)
-        self._ripple_share = parameters.torque_ripple / math.sqrt(2.0)
+        self._ripple_share = parameters.torque_ripple / math.sqrt(2.0)  # [–] (joint_std)
         self.robot = robot
         self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
         #: which joints' friction levels were measured on this arm: all of a given model's
@@ -292,6 +290,7 @@ class LeadThrough:
         self.law.reset()
         self._no_constraint = np.zeros(n)  # the constraint torque without constraints [Nm]
         self._no_gravity_reference = np.zeros(n)  # G_cal without a calibration [Nm]
+        self._ripple_std = np.zeros(n)  # the drives' ripple on the last motor torque [Nm]
         self._sent = DelayLine((2, n), p.measurement_delay)  # (command, its dither) [Nm]
         self._own_clock = 0.0  # [s], for the positional form of step, which brings no time
         self._t = float("nan")

@@ -285,7 +285,7 @@ class LeadThroughParameters:
         return cls(inertia_scale=1.0, damping_time=20.0, rest_damping=0.0, assist_knee=0.0,
                    position_bandwidth=6.0, velocity_time=0.008, mass_uncertainty=0.0,
                    friction_uncertainty=0.0, stiction_margin=0.0, drive_gain_uncertainty=0.0,
-                   bias_time=1e6,
+                   torque_ripple=0.0, bias_time=1e6,
                    reanchor_error=1e6, unwind_time=None,
                    limit_aware=False, dither=None, **changes)  # fmt: skip
 

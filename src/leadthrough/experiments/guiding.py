@@ -66,8 +66,8 @@ HOLD = 2.0  # [s] of holding the end pose after the path
 REST = 10.0  # [s] after the release (plus 0.5 s to stop)
 VIBRATION_CUTOFF = 4.0  # [Hz]
 MOVING_SPEED = 0.01  # [rad/s] a joint slower than this has stopped
-#: A hand whose force reached this share of its limit could not pull the arm along its
-#: path (out of reach, a singularity): the case measures the limit, not the controller.
+#: A hand whose force reached this share of its limit [–] could not pull the arm along
+#: its path (out of reach, a singularity): the case measures the limit, not the controller.
 SATURATED = 0.99
 
 

@@ -104,7 +104,8 @@ class Dynamics:
         ``τ_ext = Jᵀ F``.
         """
         q = self._vector(q, "q")
-        return pin.computeFrameJacobian(self.model, self.data, q, self._flange, _WORLD_ALIGNED)
+        jacobian = pin.computeFrameJacobian(self.model, self.data, q, self._flange, _WORLD_ALIGNED)
+        return np.reshape(jacobian, (6, self.model.nv))  # one joint: Pinocchio gives (6,)
 
     def pose(self, q: ArrayLike) -> FloatArray:
         """Flange pose in the world frame as a 4×4 homogeneous matrix [m]."""

@@ -30,7 +30,7 @@ from __future__ import annotations
 import dataclasses
 import tomllib
 import warnings
-from collections.abc import Sequence
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -65,9 +65,9 @@ ASSUMED_SLOPE, ASSUMED_HALF_WIDTH, ASSUMED_NOISE_FRACTION = 5e3, 2e-3, 0.05
 #: The zero reading is home for a joint if it is this fraction of the range inside.
 HOME_MARGIN = 0.1
 
-#: A home whose tool Jacobian's singular values differ by more than this is near a
-#: singularity, when they do not elsewhere in the limits [–]: there a hand's push along
-#: the weak direction barely moves the arm.
+#: A home where the tool Jacobian's smallest singular value over its largest is below this
+#: is near a singularity, when it is not elsewhere in the limits [–]: there a hand's push
+#: along the weak direction barely moves the arm.
 SINGULAR_HOME = 0.05
 
 _FRICTION_KEYS = ("coulomb", "viscous", "slope", "half_width", "noise_std")
@@ -123,18 +123,32 @@ def with_drive_data(robot: RobotDescription, path: str | Path) -> RobotDescripti
         RobotDescriptionError: The file is unreadable, a list has the wrong length or a
             value is invalid.
     """
-    data = read_drive_data(path, robot.n_joints)
+    return _applied(robot, read_drive_data(path, robot.n_joints), path)
+
+
+def _applied(robot: RobotDescription, data: dict[str, Any], path: str | Path) -> RobotDescription:
+    """``robot`` with the drive data ``data`` read from ``path``; errors name the file."""
     try:
         return _apply(robot, data)
     except RobotDescriptionError as error:
         raise RobotDescriptionError(str(path), "", str(error)) from None
 
 
+def _limit_notes(robot: RobotDescription, assumed: Mapping[str, tuple[float, float]]) -> list[str]:
+    """A note naming the joints whose position limits are still the ``assumed`` ones."""
+    kept = [joint.name for joint in robot.joints
+            if assumed.get(joint.name) == tuple(joint.position_limits)]  # fmt: skip
+    if not kept:
+        return []
+    limits = ", ".join(f"[{assumed[name][0]:.3g}, {assumed[name][1]:.3g}]" for name in kept)
+    return [f"position limits {limits} rad of the continuous joint(s) {', '.join(kept)}"]
+
+
 def complete_drive_data(
     robot: RobotDescription,
     missing: set[str],
     drive_data: str | Path | None = None,
-    limit_notes: Sequence[str] = (),
+    assumed_limits: Mapping[str, tuple[float, float]] | None = None,
 ) -> RobotDescription:
     """``robot`` with ``drive_data`` applied and what is still ``missing`` assumed.
 
@@ -143,8 +157,9 @@ def complete_drive_data(
             placeholders (e.g. a URDF's gear ratio 1 and rotor inertia 0).
         missing: Quantities the description does not know.
         drive_data: Drive data TOML file (see :func:`with_drive_data`), or None.
-        limit_notes: Position limits the caller assumed (e.g. of continuous joints),
-            stated in the warning unless the drive data give ``lower`` and ``upper``.
+        assumed_limits: Position limits [rad] the caller assumed, by joint name (e.g. of
+            continuous joints): stated in the warning for the joints whose limits the
+            drive data leave as they are.
 
     Warns:
         AssumedDriveDataWarning: Once, naming every quantity assumed (by this function
@@ -154,13 +169,11 @@ def complete_drive_data(
     assumed_by_file: list[str] = []
     if drive_data is not None:
         data = read_drive_data(drive_data, robot.n_joints)
-        robot = _apply(robot, data)
+        robot = _applied(robot, data, drive_data)
         assumed_by_file = list(data.get("assumed", []))
         missing = missing - _supplied(data)
-        if "lower" in data and "upper" in data:
-            limit_notes = ()
     robot, notes = _assume(robot, missing)
-    notes = [*limit_notes, *notes]
+    notes = [*_limit_notes(robot, assumed_limits or {}), *notes]
     if assumed_by_file:
         notes.append(f"{', '.join(assumed_by_file)} (stated in {Path(str(drive_data)).name})")
     parts = ["drive data assumed (no public numbers): " + "; ".join(notes)] if notes else []

@@ -139,4 +139,7 @@ def load(
     if path.suffix.lower() != ".toml" and not path.exists():
         shipped = ", ".join(REGISTERED)
         raise RobotDescriptionError(name, "", f"no shipped robot or file of that name ({shipped})")
+    if tip is not None or drive_data is not None:
+        raise RobotDescriptionError(name, "tip", "a TOML description takes no tip or drive data "
+                                                 "(it carries both)")  # fmt: skip
     return load_robot(path)

@@ -89,9 +89,15 @@ def from_urdf(
     if not Path(path).is_file():
         raise RobotDescriptionError(source, "", "no such file")
     try:
-        text, continuous = _bounded_continuous_joints(Path(path).read_text(encoding="utf-8"))
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as error:
+        raise RobotDescriptionError(source, "", f"cannot read it ({error})") from None
+    try:
+        text, continuous = _bounded_continuous_joints(text, source)
         full = pin.buildModelFromXML(text)
-    except (ValueError, RuntimeError, UnicodeDecodeError) as error:
+    except RobotDescriptionError:
+        raise  # a continuous joint without its limits, named
+    except (ValueError, RuntimeError) as error:
         raise RobotDescriptionError(source, "", f"not a valid URDF ({error})") from None
     with within("", source=source):
         chain_ids, tip_frame = _chain(full, tip)
@@ -104,13 +110,11 @@ def from_urdf(
     missing |= {"rotor_inertia"} if rotor_inertias is None else set()
     urdf_friction = any(joint.friction.coulomb > 0.0 for joint in robot.joints)
     missing |= {"friction"} if friction is None and not urdf_friction else set()
-    unbounded = [name for name in robot.joint_names if name in continuous]
-    notes = [f"position limits ±{CONTINUOUS_LIMIT:.3g} rad of the continuous joint(s) "
-             f"{', '.join(unbounded)}"] if unbounded else []  # fmt: skip
-    return complete_drive_data(robot, missing, drive_data, notes)
+    assumed = {name: (-CONTINUOUS_LIMIT, CONTINUOUS_LIMIT) for name in continuous}
+    return complete_drive_data(robot, missing, drive_data, assumed)
 
 
-def _bounded_continuous_joints(text: str) -> tuple[str, set[str]]:
+def _bounded_continuous_joints(text: str, source: str) -> tuple[str, set[str]]:
     """URDF ``text`` with each continuous joint made revolute within ±:data:`CONTINUOUS_LIMIT`.
 
     Its ``<limit>`` keeps its effort and velocity (a URDF's continuous joint ignores
@@ -119,6 +123,8 @@ def _bounded_continuous_joints(text: str) -> tuple[str, set[str]]:
 
     Raises:
         ValueError: ``text`` is not XML.
+        RobotDescriptionError: A continuous joint has no ``<limit effort velocity>``
+            (its torque and speed limits), naming ``source`` and the joint.
     """
     try:
         root = ElementTree.fromstring(text)
@@ -130,8 +136,10 @@ def _bounded_continuous_joints(text: str) -> tuple[str, set[str]]:
     for joint in continuous:
         joint.set("type", "revolute")
         limit = joint.find("limit")
-        if limit is None:
-            limit = ElementTree.SubElement(joint, "limit")
+        if limit is None or limit.get("effort") is None or limit.get("velocity") is None:
+            raise RobotDescriptionError(source, f"joint {joint.get('name')!r}",
+                                        "a continuous joint needs <limit effort velocity>: "
+                                        "its torque and speed limits")  # fmt: skip
         limit.set("lower", f"{-CONTINUOUS_LIMIT!r}")
         limit.set("upper", f"{CONTINUOUS_LIMIT!r}")
     names = {str(joint.get("name")) for joint in continuous}
