@@ -29,6 +29,18 @@ def test_info_reads_a_toml_file(tmp_path, capsys):
     assert "ABB YuMi" in capsys.readouterr().out
 
 
+def test_info_takes_a_urdfs_drive_data(robots_dir, tmp_path, capsys):
+    """`info --robot FILE.urdf --tip LINK --drive-data FILE`: the drive data's home is used."""
+    drive = tmp_path / "kinova.toml"
+    drive.write_text("home = [4.80, 2.92, 1.00, 4.19, 1.44, 1.31]\n")
+    urdf = robots_dir / "kinova_description/robots/kinova.urdf"
+    arguments = ["info", "--robot", str(urdf), "--tip", "j2s6s200_end_effector"]
+    assert main([*arguments, "--drive-data", str(drive)]) == 0
+    captured = capsys.readouterr()
+    assert "at q = [275. , 167.3,  57.3, 240.1,  82.5,  75.1] deg" in captured.out
+    assert "continuous joint" in captured.err and "singularity" not in captured.err
+
+
 def test_bad_robot_file_is_one_line_error(tmp_path, capsys):
     """A malformed description exits with code 2 and one line naming the file and field."""
     path = tmp_path / "broken.toml"

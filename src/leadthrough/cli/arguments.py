@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import NoReturn
 
 from leadthrough.experiments.bounds import MAX_SECONDS, TIME_SCALE_RANGE
+from leadthrough.model.description import RobotDescription
 
 #: Seeds are NumPy seeds: integers in [0, MAX_SEED].
 MAX_SEED = 2**32 - 1
@@ -124,6 +125,26 @@ def existing_file(text: str) -> Path:
     if path.is_dir():
         raise argparse.ArgumentTypeError(f"{text} is a directory, not a file")
     return path
+
+
+def add_robot_arguments(parser: argparse.ArgumentParser, default: str = "yumi") -> None:
+    """``--robot``, ``--tip`` and ``--drive-data``: the arm a command works on."""
+    from leadthrough.model import robots
+
+    parser.add_argument("--robot", default=default, metavar="NAME|FILE",
+                        help=f"shipped robot ({', '.join(robots.names())}) or a .toml/.urdf "
+                             f"description (default: {default})")  # fmt: skip
+    parser.add_argument("--tip", help="flange link of a URDF (needed when the tree branches)")
+    parser.add_argument("--drive-data", type=existing_file, metavar="FILE",
+                        help="drive data TOML of a URDF: gear ratios, rotor inertias, torque "
+                             "constants, friction, limits, home (lt.robots.from_urdf)")  # fmt: skip
+
+
+def robot_from(args: argparse.Namespace) -> RobotDescription:
+    """The robot the options of :func:`add_robot_arguments` name."""
+    from leadthrough.model import robots
+
+    return robots.load(args.robot, tip=args.tip, drive_data=args.drive_data)
 
 
 def realdata_directory(text: str) -> Path:

@@ -82,12 +82,12 @@ def real_logs(paths: Sequence[Path] | None, held_out: Sequence[Path] = ()) -> bo
 
 def identify_real(args: object) -> str:
     """``--realdata`` or real ``--log`` runs: friction, dynamics, report.md with figures."""
+    from leadthrough.cli.arguments import robot_from
     from leadthrough.experiments.real_report import write_logs_report, write_realdata_report
-    from leadthrough.model import robots
 
     if args.realdata is not None:
         return write_realdata_report(args.realdata, args.out)
-    robot = robots.load(args.robot, tip=args.tip)
+    robot = robot_from(args)
     return write_logs_report(robot, args.log, args.held_out, args.out)
 
 

@@ -6,10 +6,10 @@ import argparse
 import warnings
 from pathlib import Path
 
+from leadthrough.cli.arguments import add_robot_arguments, robot_from
 from leadthrough.estimation.log_observer import measured_torque
 from leadthrough.experiments import real_logs
 from leadthrough.friction.model import FrictionModel
-from leadthrough.model import robots
 from leadthrough.runtime.readers import read_log
 
 EPILOG = """examples:
@@ -33,10 +33,7 @@ def add_arguments(parser: argparse.ArgumentParser, out_directory) -> None:
     """The options of ``inspect`` (``out_directory``: the shared argument type)."""
     parser.add_argument("log", type=existing_log,
                         help="UR CSV, Panda text folder, recording or excitation log")  # fmt: skip
-    parser.add_argument("--robot", default="ur10e", metavar="NAME|FILE",
-                        help=f"shipped robot ({', '.join(robots.names())}) or a .toml/.urdf "
-                             "description, nominal or identified (default: ur10e)")  # fmt: skip
-    parser.add_argument("--tip", help="flange link of a URDF (needed when the tree branches)")
+    add_robot_arguments(parser, default="ur10e")  # nominal or identified
     parser.add_argument("--friction", type=_existing_file,
                         help="identified friction TOML (default: the robot's own)")  # fmt: skip
     parser.add_argument("--out", type=out_directory, default="out/inspect",
@@ -54,7 +51,7 @@ def inspect(args: argparse.Namespace) -> int:
     log = read_log(args.log)  # currents stay currents: the observer applies the robot's K
     with warnings.catch_warnings(record=True) as notes:  # shown after the work, not before
         warnings.simplefilter("always")
-        robot = robots.load(args.robot, tip=args.tip)
+        robot = robot_from(args)
     friction = FrictionModel.load(args.friction) if args.friction else None
     measured_torque(log, robot)  # joint count, torque or currents and K: checked before the work
     inspection = real_logs.inspect_log(log, robot, friction)

@@ -8,31 +8,20 @@ from collections.abc import Sequence
 
 from leadthrough.cli import arguments as arg
 from leadthrough.errors import LeadthroughError, ParameterError
-from leadthrough.model import robots
 
 _EPILOG_INFO = """examples:
   leadthrough info                       # the shipped ABB YuMi left arm
   leadthrough info --robot ur10e         # shipped: yumi, panda, ur5, ur10e
   leadthrough info --robot my_arm.toml   # a description file
   leadthrough info --robot panda.urdf --tip panda_hand
+  leadthrough info --robot arm.urdf --tip tool0 --drive-data arm_drive.toml
 """
-
-
-def _add_robot_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--robot",
-        default="yumi",
-        metavar="NAME|FILE",
-        help=f"shipped robot ({', '.join(robots.names())}) or a .toml/.urdf description "
-        "(default: yumi)",
-    )
-    parser.add_argument("--tip", help="flange link of a URDF (needed when the tree branches)")
 
 
 def _info(args: argparse.Namespace) -> int:
     from leadthrough.cli.summary import model_summary
 
-    print(model_summary(robots.load(args.robot, tip=args.tip)))
+    print(model_summary(arg.robot_from(args)))
     return 0
 
 
@@ -46,9 +35,7 @@ _EPILOG_SIMULATE = """examples:
 def _simulate(args: argparse.Namespace) -> int:
     from leadthrough.twin.session import run_scenario
 
-    summary = run_scenario(
-        robots.load(args.robot, tip=args.tip), args.scenario, args.duration, args.seed, args.out
-    )
+    summary = run_scenario(arg.robot_from(args), args.scenario, args.duration, args.seed, args.out)
     print(summary)
     return 0
 
@@ -75,7 +62,7 @@ def _identify(args: argparse.Namespace) -> int:
     if args.realdata is not None or real_logs(args.log, args.held_out):
         print(identify_real(args))
         return 0
-    robot = robots.load(args.robot, tip=args.tip)
+    robot = arg.robot_from(args)
     summary = identify(
         robot,
         args.out,
@@ -112,7 +99,7 @@ def _demo(args: argparse.Namespace) -> int:
     from leadthrough.experiments.demo import run_demo
     from leadthrough.experiments.demo_report import write_report
 
-    robot = robots.load(args.robot, tip=args.tip)
+    robot = arg.robot_from(args)
     out = args.out
     result = run_demo(out, robot)
     print("4/4 writing the report …")
@@ -127,7 +114,7 @@ def _demo(args: argparse.Namespace) -> int:
 def _teach(args: argparse.Namespace) -> int:
     from leadthrough.experiments.teach import teach_on_twin
 
-    robot = robots.load(args.robot, tip=args.tip)
+    robot = arg.robot_from(args)
     print(teach_on_twin(robot, args.out, args.path, args.mode, args.duration, args.friction,
                         args.seed, overwrite=args.force))  # fmt: skip
     return 0
@@ -144,7 +131,7 @@ def _replay(args: argparse.Namespace) -> int:
 def _experiments(args: argparse.Namespace) -> int:
     from leadthrough.experiments.report import write_experiments
 
-    report = write_experiments(robots.load(args.robot, tip=args.tip), args.out)
+    report = write_experiments(arg.robot_from(args), args.out)
     print(f"report: {report}")
     return 0
 
@@ -176,7 +163,7 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=_EPILOG_INFO,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    _add_robot_arguments(info)
+    arg.add_robot_arguments(info)
     info.set_defaults(run=_info)
     simulate = commands.add_parser(
         "simulate",
@@ -186,7 +173,7 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=_EPILOG_SIMULATE,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    _add_robot_arguments(simulate)
+    arg.add_robot_arguments(simulate)
     from leadthrough.twin.scenarios import SCENARIOS
 
     simulate.add_argument("--scenario", default="line", choices=sorted(SCENARIOS))
@@ -204,7 +191,7 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=_EPILOG_IDENTIFY,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    _add_robot_arguments(identify)
+    arg.add_robot_arguments(identify)
     identify.add_argument(
         "--log",
         type=arg.existing_file,
@@ -233,7 +220,7 @@ def build_parser() -> argparse.ArgumentParser:
                 " YuMi) a path with"
                 " active lead-through (recorded), replay it, and write a report with figures.",
                 _EPILOG_DEMO, _demo)  # fmt: skip
-    _add_robot_arguments(demo)
+    arg.add_robot_arguments(demo)
     demo.add_argument(
         "--out",
         type=arg.out_directory,
@@ -243,7 +230,7 @@ def build_parser() -> argparse.ArgumentParser:
     teach = _add(commands, "teach", "teach the twin a path with a simulated hand, recorded",
                  "A simulated operator guides the twin with lead-through; the session is recorded"
                  " to an MCAP file.", _EPILOG_TEACH, _teach)  # fmt: skip
-    _add_robot_arguments(teach)
+    arg.add_robot_arguments(teach)
     teach.add_argument("--path", default="line", choices=["line", "circle", "point_to_point"])
     teach.add_argument("--mode", default="active", choices=["active", "passive"])
     teach.add_argument(
@@ -286,7 +273,7 @@ def build_parser() -> argparse.ArgumentParser:
                        " twin into one Markdown report.",
                        "examples:\n  leadthrough experiments --out out/experiments\n",
                        _experiments)  # fmt: skip
-    _add_robot_arguments(experiments)
+    arg.add_robot_arguments(experiments)
     experiments.add_argument(
         "--out", type=arg.out_directory, default="out/experiments", help="report directory"
     )
