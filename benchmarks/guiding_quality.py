@@ -38,6 +38,7 @@ import sys
 import time
 from dataclasses import asdict, fields, replace
 
+from leadthrough.cli.arguments import add_robot_arguments, robot_from
 from leadthrough.errors import ParameterError, RobotDescriptionError
 from leadthrough.experiments.guiding import (
     BENCHMARK_HANDS,
@@ -50,7 +51,6 @@ from leadthrough.experiments.guiding import (
     evaluate,
     uncalibrated_factory,
 )
-from leadthrough.model import robots
 from leadthrough.twin.plants import PlantRanges
 from leadthrough.twin.simulator import TwinConfig, TwinError
 
@@ -91,10 +91,14 @@ def uncalibrated_line(results: dict[str, dict[str, float]]) -> str:
     that the calibration refuses (seeds 9–12 did, 14 of 56 cases) cannot hide in the table.
     """
     missing = [name for name, f in results.items() if not f["calibrated"]]
-    listed = ", ".join(missing[:3]) + (", …" if len(missing) > 3 else "")
     return f"guided without a calibration: {len(missing)} of {len(results)} cases" + (
-        f" ({listed})" if missing else ""
+        f" ({_first_names(missing)})" if missing else ""
     )
+
+
+def _first_names(names: list[str]) -> str:
+    """The first three case names, then "…" if there are more."""
+    return ", ".join(names[:3]) + (", …" if len(names) > 3 else "")
 
 
 def saturated_line(results: dict[str, dict[str, float]]) -> str:
@@ -107,10 +111,9 @@ def saturated_line(results: dict[str, dict[str, float]]) -> str:
     stuck = [name for name, f in results.items() if f.get("hand_saturated")]
     if not stuck:
         return ""
-    listed = ", ".join(stuck[:3]) + (", …" if len(stuck) > 3 else "")
     return (
         f"the hand saturated (path out of reach or through a singularity): {len(stuck)} "
-        f"of {len(results)} cases ({listed}); their figures measure the workspace"
+        f"of {len(results)} cases ({_first_names(stuck)}); their figures measure the workspace"
     )
 
 
@@ -158,12 +161,7 @@ def plant_ranges(settings: list[str] | None) -> PlantRanges:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", choices=("full", "quick"), default="full")
-    parser.add_argument(
-        "--robot", default="yumi", help="a registered robot or a URDF / TOML file (default yumi)"
-    )
-    parser.add_argument("--tip", help="flange link of a URDF (needed when the tree branches)")
-    parser.add_argument("--drive-data", help="drive data TOML of a URDF (gear ratios, "
-                        "friction, home, ...; see lt.robots.from_urdf)")  # fmt: skip
+    add_robot_arguments(parser)  # --robot, --tip, --drive-data, as the command line's
     parser.add_argument(
         "--uncalibrated",
         action="store_true",
@@ -232,7 +230,7 @@ def main(argv: list[str] | None = None) -> None:
     except (ParameterError, TwinError) as error:
         parser.error(f"--dt: {error}")
     try:
-        robot = robots.load(args.robot, tip=args.tip, drive_data=args.drive_data)
+        robot = robot_from(args)
     except RobotDescriptionError as error:
         parser.error(str(error))
     total, start = len(cases(args.cases, seeds, hands, ranges)), time.perf_counter()

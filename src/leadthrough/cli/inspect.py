@@ -6,7 +6,7 @@ import argparse
 import warnings
 from pathlib import Path
 
-from leadthrough.cli.arguments import add_robot_arguments, robot_from
+from leadthrough.cli.arguments import add_robot_arguments, existing_file, robot_from
 from leadthrough.estimation.log_observer import measured_torque
 from leadthrough.experiments import real_logs
 from leadthrough.friction.model import FrictionModel
@@ -34,16 +34,10 @@ def add_arguments(parser: argparse.ArgumentParser, out_directory) -> None:
     parser.add_argument("log", type=existing_log,
                         help="UR CSV, Panda text folder, recording or excitation log")  # fmt: skip
     add_robot_arguments(parser, default="ur10e")  # nominal or identified
-    parser.add_argument("--friction", type=_existing_file,
+    parser.add_argument("--friction", type=existing_file,
                         help="identified friction TOML (default: the robot's own)")  # fmt: skip
     parser.add_argument("--out", type=out_directory, default="out/inspect",
                         help="report directory (default: out/inspect)")  # fmt: skip
-
-
-def _existing_file(text: str) -> Path:
-    from leadthrough.cli.arguments import existing_file
-
-    return existing_file(text)
 
 
 def inspect(args: argparse.Namespace) -> int:

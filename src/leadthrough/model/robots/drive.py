@@ -197,8 +197,8 @@ def _apply(robot: RobotDescription, data: dict[str, Any]) -> RobotDescription:
         friction = dataclasses.replace(joint.friction, **changed)
         drive: dict[str, Any] = {key: float(data[key][i]) for key in _DRIVE_KEYS if key in data}
         lower, upper = joint.position_limits
-        limits = (float(data.get("lower", [lower] * robot.n_joints)[i]),
-                  float(data.get("upper", [upper] * robot.n_joints)[i]))  # fmt: skip
+        limits = (float(data["lower"][i]) if "lower" in data else lower,
+                  float(data["upper"][i]) if "upper" in data else upper)  # fmt: skip
         joints.append(dataclasses.replace(joint, friction=friction, position_limits=limits,
                                           **drive))  # fmt: skip
     home = np.array(data["home"], dtype=float) if "home" in data else robot.home_position
