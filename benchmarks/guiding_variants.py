@@ -261,6 +261,34 @@ def true_torque_plain(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
     return _build(robot, mode, cls=_TrueTorque, **PLAIN)
 
 
+class _TrueTorqueNoMarginLaw(_TrueTorqueLaw):
+    margin_share = 0.0
+
+
+class _TrueTorqueNoMargin(_TrueTorque):
+    law_class = _TrueTorqueNoMarginLaw
+
+
+def true_torque_no_margin(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """The defaults without the friction margin, fed the twin's true operator torque.
+
+    What the margin costs where the reading holds no friction error (the truth reads 0
+    once the hand lets go, so no released arm needs it), and what the weight and the
+    rising damping cost beyond it.
+    """
+    return _build(robot, mode, cls=_TrueTorqueNoMargin)
+
+
+def no_drive_gain_margin(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """The law without its drive-gain term (``drive_gain_uncertainty = 0``).
+
+    The default removes 10 % of the last tracking torque from the residual
+    (``LeadThroughParameters.drive_gain_uncertainty``); run on the family and with
+    ``--plants torque_gain=0.7,1.3`` (design log, *The drive-gain term*).
+    """
+    return _build(robot, mode, drive_gain_uncertainty=0.0)
+
+
 class _NoCreditAtRest(lt.LeadThrough):
     """The law reads a second filter that credits no friction to a joint it calls at rest.
 

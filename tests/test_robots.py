@@ -131,6 +131,45 @@ def test_continuous_joints_and_a_singular_home_are_stated(robots_dir, tmp_path):
 
 
 @pytest.mark.parametrize(
+    ("urdf", "joint", "flange", "n_arm"),
+    [("z1_description/urdf/z1.urdf", "jointGripper", "gripperStator", 6),
+     ("so_arm_description/urdf/so101.urdf", "gripper", "gripper_link", 5)],
+)  # fmt: skip
+def test_a_chain_that_ends_in_a_gripper_joint_is_named(robots_dir, urdf, joint, flange, n_arm):
+    """Without ``tip`` the Z1's and the SO-101's jaw joint would be guided as an arm joint.
+
+    The warning names it and the link it hangs from; that link as the tip (on the Z1 a
+    joint has the same name: the link is meant) loads the arm without it, and no warning.
+    """
+    path = robots_dir / urdf
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        lt.robots.from_urdf(path)
+        robot = lt.robots.from_urdf(path, tip=flange)
+    gripper = [w for w in caught if issubclass(w.category, lt.robots.GripperJointWarning)]
+    assert len(gripper) == 1
+    assert f"joint {joint!r}" in str(gripper[0].message)
+    assert f"tip={flange!r}" in str(gripper[0].message)
+    assert robot.n_joints == n_arm
+
+
+def test_an_arm_chain_raises_no_gripper_warning(robots_dir):
+    """A chain whose last joint is the arm's (the Kinova's) is not taken for a gripper."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        lt.robots.from_urdf(robots_dir / "kinova_description/robots/kinova.urdf",
+                            tip="j2s6s200_end_effector")  # fmt: skip
+        lt.robots.from_urdf(THREE_JOINT)
+    assert not [w for w in caught if issubclass(w.category, lt.robots.GripperJointWarning)]
+
+
+def test_an_unknown_tip_suggests_each_name_once(robots_dir):
+    """The Z1 has a joint and a link called gripperStator: suggested once."""
+    with pytest.raises(RobotDescriptionError, match=r"did you mean 'gripperStator', 'gripper"):
+        lt.robots.from_urdf(robots_dir / "z1_description/urdf/z1.urdf", tip="gripperStato")
+
+
+@pytest.mark.parametrize(
     ("text", "key"),
     [
         ("coulomb = [1.0, 2.0]\n", "coulomb"),

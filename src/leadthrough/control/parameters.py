@@ -99,8 +99,10 @@ class LeadThroughParameters:
         drive_gain_uncertainty: Relative error of the drives' torque constants [–]: a drive
             that applies 10 % more than it reports makes 10 % of the tracking torque read
             as a push along it (positive feedback); that much of the last tracking torque
-            is taken off the estimate, so the error reads as drag instead. The gravity
-            feed-forward is off by as much (:attr:`gravity_uncertainty`).
+            is taken off the estimate, so the error reads as drag instead. (A drive that
+            applies less than it reports reads a *braking* tracking torque as a push along
+            the motion, which this signed term adds to: design log, *The drive-gain term*.)
+            The gravity feed-forward is off by as much (:attr:`gravity_uncertainty`).
         position_bandwidth: K_P_ii = m_ii(q) (2π f)² [Hz]; 0 is damping control (§6.3.1).
         velocity_time: K_D_ii = m_ii(q) / velocity_time [s]: 20 rad/s, below the bandwidth
             of a differenced, filtered velocity (15–40 Hz); a stiffer velocity loop on that

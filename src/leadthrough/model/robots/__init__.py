@@ -25,11 +25,12 @@ from leadthrough.model.robots.toml_format import (
     robot_to_dict,
     save_robot,
 )
-from leadthrough.model.robots.urdf import from_urdf
+from leadthrough.model.robots.urdf import GripperJointWarning, from_urdf
 
 __all__ = [
     "REGISTERED",
     "AssumedDriveDataWarning",
+    "GripperJointWarning",
     "complete_drive_data",
     "from_toml",
     "from_urdf",

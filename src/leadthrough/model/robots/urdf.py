@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import difflib
 import math
+import re
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from xml.etree import ElementTree
@@ -47,6 +49,14 @@ CONTINUOUS_LIMIT = 2.0 * math.pi
 _OTHER_KINDS = {"JointModelPX": "prismatic", "JointModelPY": "prismatic",
                 "JointModelPZ": "prismatic", "JointModelPrismaticUnaligned": "prismatic",
                 "JointModelFreeFlyer": "floating", "JointModelPlanar": "planar"}  # fmt: skip
+
+#: A joint name that says the joint moves a gripper's fingers or jaw, not the arm.
+_GRIPPER_NAME = re.compile(r"grip|finger|jaw|claw", re.IGNORECASE)
+
+
+class GripperJointWarning(UserWarning):
+    """A URDF loaded without ``tip`` ends in a joint whose name says it is a gripper's."""
+
 
 #: Sigmoid shape given to URDF friction, which has no such parameters (Table 4.1 values).
 DEFAULT_SLOPE = 5e3
@@ -101,6 +111,8 @@ def from_urdf(
         raise RobotDescriptionError(source, "", f"not a valid URDF ({error})") from None
     with within("", source=source):
         chain_ids, tip_frame = _chain(full, tip)
+        if tip is None:
+            _warn_gripper_joint(text, str(full.names[chain_ids[-1]]), source)
         model = _lock_off_chain(full, chain_ids)
         joints = _joints(model, gear_ratios, rotor_inertias, friction)
         flange = _flange(model, tip_frame)
@@ -150,11 +162,11 @@ def _chain(model: pin.Model, tip: str | None) -> tuple[list[int], str | None]:
     """Joint ids from the root to ``tip`` (or of the only chain when ``tip`` is None)."""
     if tip is not None:
         if not model.existFrame(tip):
-            known = [frame.name for frame in model.frames]
+            known = list(dict.fromkeys(frame.name for frame in model.frames))
             close = difflib.get_close_matches(tip, known, n=3, cutoff=0.5)
             hint = f"; did you mean {', '.join(map(repr, close))}?" if close else ""
             raise RobotDescriptionError("", "tip", f"no link or frame named {tip!r}{hint}")
-        joint_id = model.frames[model.getFrameId(tip)].parentJoint
+        joint_id = model.frames[_frame_id(model, tip)].parentJoint
     else:
         joint_id = _single_leaf(model)
     chain = []
@@ -164,6 +176,30 @@ def _chain(model: pin.Model, tip: str | None) -> tuple[list[int], str | None]:
     if not chain:
         raise RobotDescriptionError("", "tip", "no moving joint between the root and the tip")
     return chain[::-1], tip
+
+
+def _frame_id(model: pin.Model, name: str) -> int:
+    """The frame called ``name``: the link's where a joint has the same name (a Z1's)."""
+    if model.existFrame(name, pin.FrameType.BODY):
+        return int(model.getFrameId(name, pin.FrameType.BODY))
+    return next(i for i, frame in enumerate(model.frames) if frame.name == name)
+
+
+def _warn_gripper_joint(text: str, joint: str, source: str) -> None:
+    """Warn if the chain's last ``joint`` is named as a gripper's (fingers, jaw).
+
+    Without ``tip`` the chain runs to the last moving joint, and on arms whose gripper
+    is one jaw joint at the end of the chain (an SO-101, a Z1) that is the gripper's:
+    the controller would guide it as an arm joint. The warning names the link the
+    joint hangs from, the flange to give as ``tip``.
+    """
+    if not _GRIPPER_NAME.search(joint):
+        return
+    element = ElementTree.fromstring(text).find(f"joint[@name='{joint}']/parent")
+    parent = "" if element is None else f" (tip={element.get('link')!r})"
+    warnings.warn(f"{source}: the chain ends in joint {joint!r}, which its name says is a "
+                  f"gripper's; name the flange link{parent} to guide the arm without it",
+                  GripperJointWarning, stacklevel=4)  # fmt: skip
 
 
 def _single_leaf(model: pin.Model) -> int:
@@ -259,5 +295,5 @@ def _flange(model: pin.Model, tip: str | None) -> Placement:
     """The tip frame in the last chain joint frame (identity without a tip)."""
     if tip is None:
         return Placement()
-    placement = model.frames[model.getFrameId(tip)].placement
+    placement = model.frames[_frame_id(model, tip)].placement
     return Placement(placement.translation, placement.rotation)
