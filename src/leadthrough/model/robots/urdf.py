@@ -9,7 +9,9 @@ come from the arguments, a drive data file, the URDF ``<dynamics friction dampin
 missing is assumed with one warning naming it (:mod:`leadthrough.model.robots.drive`).
 A continuous joint (a UR's or a Kinova's) becomes a revolute one of
 :data:`CONTINUOUS_LIMIT` either way (one turn, as UR's controllers limit theirs), stated in
-that warning; drive data ``lower`` and ``upper`` set other limits.
+that warning; drive data ``lower`` and ``upper`` set other limits. Without ``tip``, a chain
+that ends in a joint named as a gripper's (an SO-101's or a Z1's jaw) is warned about
+(:class:`GripperJointWarning`), naming the link to give as the tip instead.
 """
 
 from __future__ import annotations
@@ -89,6 +91,9 @@ def from_urdf(
         AssumedDriveDataWarning: Once, naming what neither the arguments, the URDF nor
             the drive data give (gear ratios, rotor inertias, friction, home pose) and
             what is assumed instead.
+        GripperJointWarning: Without ``tip``, the chain's last joint is named as a
+            gripper's (``grip``, ``finger``, ``jaw``, ``claw``): it would be guided as an
+            arm joint.
 
     Raises:
         RobotDescriptionError: The file is unreadable, not a URDF, ``tip`` is unknown,
