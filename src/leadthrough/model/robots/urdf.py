@@ -204,7 +204,7 @@ def _warn_gripper_joint(text: str, joint: str, source: str) -> None:
     parent = "" if element is None else f" (tip={element.get('link')!r})"
     warnings.warn(f"{source}: the chain ends in joint {joint!r}, which its name says is a "
                   f"gripper's; name the flange link{parent} to guide the arm without it",
-                  GripperJointWarning, stacklevel=4)  # fmt: skip
+                  GripperJointWarning, stacklevel=3)  # fmt: skip
 
 
 def _single_leaf(model: pin.Model) -> int:
