@@ -408,6 +408,68 @@ def vibration_windows(
     return starts, np.array(rms)
 
 
+#: A joint is loaded when the operator's true torque on it exceeds this share of its
+#: nominal Coulomb level [–] (:func:`effort_split`).
+LOADED = 0.3
+
+
+class EffortSplit(NamedTuple):
+    """The effort figure of one case split where a loaded joint sticks (:func:`effort_split`).
+
+    Attributes:
+        stuck_time: Share of the path's samples where some joint the operator loads
+            (:data:`LOADED`) stands still in the active run [–].
+        stuck_share: Share of passive mode's Σ F² that falls in those samples [–].
+        stuck_ratio: Active over passive RMS hand force in those samples [–].
+        sliding_ratio: The same in the others, where every loaded joint slides [–].
+        ratio: The same over the whole path: the benchmark's effort [–].
+    """
+
+    stuck_time: float
+    stuck_share: float
+    stuck_ratio: float
+    sliding_ratio: float
+    ratio: float
+
+
+def effort_split(
+    case: Case,
+    controller_factory: ControllerFactory | None = None,
+    robot: RobotDescription | None = None,
+) -> EffortSplit:
+    """Where in the held runs of ``case`` active mode saves the operator's force.
+
+    Each sample of the path is *stuck* when some joint whose true operator torque exceeds
+    :data:`LOADED` of its nominal Coulomb level moves slower than :data:`JOINT_MOVING` in
+    the active run (stiction holds a push the motor torques cannot show), else *sliding*;
+    the hand forces of both modes are compared in each. Diagnosis: it reads the twin's
+    true operator torque. ``ratio² = s · stuck_ratio² + (1 − s) · sliding_ratio²`` with
+    ``s = stuck_share``.
+    """
+    robot = _robot_or_yumi(robot)
+    path = case_path(robot, case.path)
+    factory = controller_factory or default_factory
+    runs = [_run(robot, case, mode, factory, np.inf, path.duration + HOLD)[0]
+            for mode in ("passive", "active")]  # fmt: skip
+    passive, active = runs
+    n = min(len(passive.t), len(active.t))
+    moving = active.t[:n] <= path.duration
+    coulomb = np.array([joint.friction.coulomb for joint in robot.joints])
+    loaded = np.abs(active.tau_operator[:n]) > LOADED * coulomb
+    still = np.abs(active.qd_true[:n]) < JOINT_MOVING
+    stuck = np.any(loaded & still, axis=1) & moving
+    sliding = moving & ~stuck
+    active_sq, passive_sq = active.operator_force[:n] ** 2, passive.operator_force[:n] ** 2
+
+    def ratio(samples: FloatArray) -> float:
+        below = passive_sq[samples].sum()
+        return float(np.sqrt(active_sq[samples].sum() / below)) if below > 0.0 else np.nan
+
+    return EffortSplit(float(stuck.sum() / moving.sum()),
+                       float(passive_sq[stuck].sum() / passive_sq[moving].sum()),
+                       ratio(stuck), ratio(sliding), ratio(moving))  # fmt: skip
+
+
 def joint_motion(qd: FloatArray, dt: float) -> FloatArray:
     """The joint velocities below :data:`VIBRATION_CUTOFF` [rad/s] (zero-phase), (N, n).
 
