@@ -279,14 +279,33 @@ def true_torque_no_margin(robot: lt.RobotDescription, mode: str) -> lt.LeadThrou
     return _build(robot, mode, cls=_TrueTorqueNoMargin)
 
 
+class _NoDriveGainTermLaw(ActiveLaw):
+    """The law's residual without ``− drive_gain_uncertainty · τ_PD`` (the last tracking torque).
+
+    The tracking torque enters the operator torque only there, so it is read as zero;
+    ``drive_gain_uncertainty`` itself stays, as it also sets the gravity tolerance.
+    """
+
+    def operator_torque(self, estimate: Any, q: Any, qd: Any, gravity: Any) -> Any:
+        feedback, self.feedback = self.feedback, np.zeros_like(self.feedback)
+        try:
+            return super().operator_torque(estimate, q, qd, gravity)
+        finally:
+            self.feedback = feedback
+
+
+class _NoDriveGainTerm(lt.LeadThrough):
+    law_class = _NoDriveGainTermLaw
+
+
 def no_drive_gain_margin(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
-    """The law without its drive-gain term (``drive_gain_uncertainty = 0``).
+    """The law without its drive-gain term (:class:`_NoDriveGainTermLaw`).
 
     The default removes 10 % of the last tracking torque from the residual
     (``LeadThroughParameters.drive_gain_uncertainty``); run on the family and with
     ``--plants torque_gain=0.7,1.3`` (design log, *The drive-gain term*).
     """
-    return _build(robot, mode, drive_gain_uncertainty=0.0)
+    return _build(robot, mode, cls=_NoDriveGainTerm)
 
 
 class _NoCreditAtRest(lt.LeadThrough):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+import leadthrough as lt
 from leadthrough.experiments.guiding import Case, effort_split, figures, run_case
 
 #: Joint 1 sticks for most of this line while the hand loads it (README, *What stiction
@@ -29,3 +30,13 @@ def test_the_two_parts_make_up_the_whole(split):
     whole = s * split.stuck_ratio**2 + (1.0 - s) * split.sliding_ratio**2
     assert split.ratio**2 == pytest.approx(whole, rel=1e-9)
     assert 0.0 < split.stuck_time < 1.0 and 0.0 < s < 1.0
+
+
+def test_runs_of_different_periods_are_refused():
+    """An active controller at 2 ms against the default passive one at 4 ms: one error."""
+
+    def two_ms(robot, mode):
+        return lt.LeadThrough(robot, mode=mode, dt=0.002, calibrate=True)
+
+    with pytest.raises(ValueError, match="sampled differently"):
+        effort_split(Case("dry", 1, "stiff", "upwards"), controller_factory=two_ms)

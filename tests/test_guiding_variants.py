@@ -19,7 +19,7 @@ FACTORIES = ("no_unwinding", "no_weighting", "full_residual", "long_stroke", "lo
              "no_friction_margin", "half_friction_margin",
              "three_quarter_friction_margin", "joint_estimates",
              "plain_admittance", "own_rest_uncertainty", "no_credit_at_rest",
-             "no_credit_at_rest_uncalibrated")  # fmt: skip
+             "no_credit_at_rest_uncalibrated", "no_drive_gain_margin")  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -96,6 +96,25 @@ def test_scaled_margin_is_that_share_of_the_default(robot, name, scale):
     np.testing.assert_allclose(compiled, expected, rtol=1e-9, atol=1e-12)
 
 
+def test_without_the_drive_gain_term_the_tracking_torque_reads_as_nothing(robot):
+    """The default removes 10 % of the last tracking torque from the residual, the variant none.
+
+    It keeps the gravity tolerance, which ``drive_gain_uncertainty`` also sets.
+    """
+    q, qd = np.array(robot.home(), dtype=float), np.zeros(robot.n_joints)
+    law = lt.LeadThrough(robot, mode="active").law
+    variant = guiding_variants.no_drive_gain_margin(robot, "active").law
+    assert variant.parameters.gravity_uncertainty == law.parameters.gravity_uncertainty
+    tracking = np.linspace(-1.0, 1.0, robot.n_joints)
+    for each in (law, variant):
+        each.reset()
+        each.feedback[:] = tracking
+        each.operator_torque(np.zeros(each.n), q, qd, np.zeros(each.n))
+    np.testing.assert_allclose(law.residual, -0.1 * tracking, atol=1e-12)
+    np.testing.assert_array_equal(variant.residual, np.zeros(robot.n_joints))
+    np.testing.assert_array_equal(variant.feedback, tracking)  # the law's state is kept
+
+
 def _residual(law, q, qd):
     """The compiled law's residual for a zero estimate at (q, q̇), gravity zero [Nm]."""
     law.reset()
@@ -103,7 +122,7 @@ def _residual(law, q, qd):
     return law.residual.copy()
 
 
-@pytest.mark.parametrize("name", ("true_torque", "true_torque_plain"))
+@pytest.mark.parametrize("name", ("true_torque", "true_torque_plain", "true_torque_no_margin"))
 def test_an_oracle_guides_on_the_truth_it_is_handed(robot, name):
     """Handed a twin whose operator pushes joint 4, the oracle follows that push, not the motors."""
     push = np.zeros(robot.n_joints)

@@ -153,6 +153,15 @@ def test_a_chain_that_ends_in_a_gripper_joint_is_named(robots_dir, urdf, joint, 
     assert robot.n_joints == n_arm
 
 
+@pytest.mark.filterwarnings("ignore::leadthrough.model.robots.AssumedDriveDataWarning")
+def test_a_gripper_joint_named_with_a_quote_is_warned_about(tmp_path):
+    """Any joint name is read as text (a quote once broke the parent link's lookup)."""
+    path = tmp_path / "quoted.urdf"
+    path.write_text(THREE_JOINT.read_text().replace('name="elbow"', 'name="elbow_gripper\'s"'))
+    with pytest.warns(lt.robots.GripperJointWarning, match=r"tip='l2'"):
+        lt.robots.from_urdf(path)
+
+
 def test_an_arm_chain_raises_no_gripper_warning(robots_dir):
     """A chain without ``tip`` whose last joint is the arm's (a UR5's wrist) is not a gripper's."""
     with warnings.catch_warnings(record=True) as caught:
@@ -165,7 +174,9 @@ def test_an_arm_chain_raises_no_gripper_warning(robots_dir):
 
 def test_an_unknown_tip_suggests_each_name_once(robots_dir):
     """The Z1 has a joint and a link called gripperStator: suggested once."""
-    with pytest.raises(RobotDescriptionError, match=r"did you mean 'gripperStator', 'gripper"):
+    with pytest.raises(
+        RobotDescriptionError, match=r"did you mean 'gripperStator', 'gripperMover'"
+    ):
         lt.robots.from_urdf(robots_dir / "z1_description/urdf/z1.urdf", tip="gripperStato")
 
 

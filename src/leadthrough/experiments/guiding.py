@@ -22,12 +22,14 @@ simulated robot before the grab (an oracle may then read the true operator torqu
 from __future__ import annotations
 
 import hashlib
+import math
 import pickle
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any, NamedTuple
 
 import numpy as np
+from numpy.typing import NDArray
 
 from leadthrough.control.calibration import CalibrationParameters
 from leadthrough.control.lead_through import LeadThrough
@@ -43,6 +45,8 @@ from leadthrough.twin.paths import Circle, Line, Path
 from leadthrough.twin.plants import PlantRanges, sample_plant
 from leadthrough.twin.runner import SimulationResult, simulate
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig
+
+BoolArray = NDArray[np.bool_]
 
 #: Hand impedances: (stiffness [N/m], damping [N s/m]). The benchmark's two span the
 #: issue's relaxed and stiff hands; "soft" and "firm" fill the 100–3000 N/m a person
@@ -436,6 +440,7 @@ def effort_split(
     case: Case,
     controller_factory: ControllerFactory | None = None,
     robot: RobotDescription | None = None,
+    passive_factory: ControllerFactory | None = None,
 ) -> EffortSplit:
     """Where in the held runs of ``case`` active mode saves the operator's force.
 
@@ -444,30 +449,46 @@ def effort_split(
     the active run (stiction holds a push the motor torques cannot show), else *sliding*;
     the hand forces of both modes are compared in each. Diagnosis: it reads the twin's
     true operator torque. ``ratio² = s · stuck_ratio² + (1 − s) · sliding_ratio²`` with
-    ``s = stuck_share``.
+    ``s = stuck_share``; a part with no samples (or no passive force) is NaN.
+
+    Args:
+        case: The case.
+        controller_factory: Builds the active controller, as in :func:`evaluate`.
+        robot: The nominal description (default the YuMi).
+        passive_factory: Builds the passive controller, as in :func:`evaluate`.
+
+    Raises:
+        ValueError: The two runs were not sampled at the same times (controllers of
+            different periods).
     """
     robot = _robot_or_yumi(robot)
     path = case_path(robot, case.path)
-    factory = controller_factory or default_factory
-    runs = [_run(robot, case, mode, factory, np.inf, path.duration + HOLD)[0]
-            for mode in ("passive", "active")]  # fmt: skip
-    passive, active = runs
-    n = min(len(passive.t), len(active.t))
-    moving = active.t[:n] <= path.duration
+    passive = _run(robot, case, "passive", passive_factory or default_factory, np.inf,
+                   path.duration + HOLD)[0]  # fmt: skip
+    active = _run(robot, case, "active", controller_factory or default_factory, np.inf,
+                  path.duration + HOLD)[0]  # fmt: skip
+    if not np.array_equal(passive.t, active.t):
+        raise ValueError(f"{case.name}: the passive and active runs are sampled differently")
+    moving = active.t <= path.duration
     coulomb = np.array([joint.friction.coulomb for joint in robot.joints])
-    loaded = np.abs(active.tau_operator[:n]) > LOADED * coulomb
-    still = np.abs(active.qd_true[:n]) < JOINT_MOVING
-    stuck = np.any(loaded & still, axis=1) & moving
-    sliding = moving & ~stuck
-    active_sq, passive_sq = active.operator_force[:n] ** 2, passive.operator_force[:n] ** 2
+    loaded = np.abs(active.tau_operator) > LOADED * coulomb
+    stuck = np.any(loaded & (np.abs(active.qd_true) < JOINT_MOVING), axis=1) & moving
+    active_sq, passive_sq = active.operator_force**2, passive.operator_force**2
+    return EffortSplit(_share(stuck, moving), _share(passive_sq * stuck, passive_sq * moving),
+                       _force_ratio(active_sq, passive_sq, stuck),
+                       _force_ratio(active_sq, passive_sq, moving & ~stuck),
+                       _force_ratio(active_sq, passive_sq, moving))  # fmt: skip
 
-    def ratio(samples: FloatArray) -> float:
-        below = passive_sq[samples].sum()
-        return float(np.sqrt(active_sq[samples].sum() / below)) if below > 0.0 else np.nan
 
-    return EffortSplit(float(stuck.sum() / moving.sum()),
-                       float(passive_sq[stuck].sum() / passive_sq[moving].sum()),
-                       ratio(stuck), ratio(sliding), ratio(moving))  # fmt: skip
+def _share(part: FloatArray, whole: FloatArray) -> float:
+    """``Σ part / Σ whole`` [–], NaN when the whole is 0."""
+    total = float(np.sum(whole))
+    return float(np.sum(part)) / total if total > 0.0 else math.nan
+
+
+def _force_ratio(active_sq: FloatArray, passive_sq: FloatArray, samples: BoolArray) -> float:
+    """Active over passive RMS hand force over ``samples`` [–], NaN without passive force."""
+    return math.sqrt(_share(active_sq[samples], passive_sq[samples]))
 
 
 def joint_motion(qd: FloatArray, dt: float) -> FloatArray:

@@ -200,7 +200,8 @@ def _warn_gripper_joint(text: str, joint: str, source: str) -> None:
     """
     if not _GRIPPER_NAME.search(joint):
         return
-    element = ElementTree.fromstring(text).find(f"joint[@name='{joint}']/parent")
+    joints = ElementTree.fromstring(text).iter("joint")
+    element = next((j.find("parent") for j in joints if j.get("name") == joint), None)
     parent = "" if element is None else f" (tip={element.get('link')!r})"
     warnings.warn(f"{source}: the chain ends in joint {joint!r}, which its name says is a "
                   f"gripper's; name the flange link{parent} to guide the arm without it",
