@@ -69,7 +69,9 @@ CIRCLE_DURATION = 6.0  # [s]
 HOLD = 2.0  # [s] of holding the end pose after the path
 REST = 10.0  # [s] after the release (plus 0.5 s to stop)
 VIBRATION_CUTOFF = 4.0  # [Hz]
-MOVING_SPEED = 0.01  # [rad/s] a joint slower than this has stopped
+#: A joint moves faster than this [rad/s] and has stopped below it (the controller's
+#: ``rest_velocity``).
+MOVING_SPEED = 0.01
 #: A hand whose force reached this share of its limit [–] could not pull the arm along
 #: its path (out of reach, a singularity): the case measures the limit, not the controller.
 SATURATED = 0.99
@@ -445,7 +447,7 @@ def effort_split(
     """Where in the held runs of ``case`` active mode saves the operator's force.
 
     Each sample of the path is *stuck* when some joint whose true operator torque exceeds
-    :data:`LOADED` of its nominal Coulomb level moves slower than :data:`JOINT_MOVING` in
+    :data:`LOADED` of its nominal Coulomb level moves slower than :data:`MOVING_SPEED` in
     the active run (stiction holds a push the motor torques cannot show), else *sliding*;
     the hand forces of both modes are compared in each. Diagnosis: it reads the twin's
     true operator torque. ``ratio² = s · stuck_ratio² + (1 − s) · sliding_ratio²`` with
@@ -463,16 +465,16 @@ def effort_split(
     """
     robot = _robot_or_yumi(robot)
     path = case_path(robot, case.path)
-    passive = _run(robot, case, "passive", passive_factory or default_factory, np.inf,
-                   path.duration + HOLD)[0]  # fmt: skip
-    active = _run(robot, case, "active", controller_factory or default_factory, np.inf,
-                  path.duration + HOLD)[0]  # fmt: skip
+    passive, active = (_run(robot, case, mode, factory or default_factory, np.inf,
+                            path.duration + HOLD)[0]
+                       for mode, factory in (("passive", passive_factory),
+                                             ("active", controller_factory)))  # fmt: skip
     if not np.array_equal(passive.t, active.t):
         raise ValueError(f"{case.name}: the passive and active runs are sampled differently")
     moving = active.t <= path.duration
     coulomb = np.array([joint.friction.coulomb for joint in robot.joints])
     loaded = np.abs(active.tau_operator) > LOADED * coulomb
-    stuck = np.any(loaded & (np.abs(active.qd_true) < JOINT_MOVING), axis=1) & moving
+    stuck = np.any(loaded & (np.abs(active.qd_true) < MOVING_SPEED), axis=1) & moving
     active_sq, passive_sq = active.operator_force**2, passive.operator_force**2
     return EffortSplit(_share(stuck, moving), _share(passive_sq * stuck, passive_sq * moving),
                        _force_ratio(active_sq, passive_sq, stuck),
@@ -523,10 +525,6 @@ def release_figures(sim: SimulationResult, release: float) -> tuple[float, float
     return stop_time, float(np.max(np.abs(settled - settled[0])))
 
 
-#: A joint moves faster than this [rad/s] (the controller's ``rest_velocity``).
-JOINT_MOVING = 0.01
-
-
 class _ObserverFigures(NamedTuple):
     """The observer's figures of one run, each relative to the joints' peak torques [–]."""
 
@@ -543,7 +541,7 @@ def _observer_figures(
 
     The RMS error is over every sample while the hand moves; the coverage, the std and
     the second RMS error over the samples where the joint itself moves (faster than
-    :data:`JOINT_MOVING`), as issue 13 states them: where a joint stands still its
+    :data:`MOVING_SPEED`), as issue 13 states them: where a joint stands still its
     friction may hold any push below breakaway unseen, and the honest std there is as
     wide as that (the blind spot at rest, README). Joints whose peak operator torque is
     below 10 % of the largest joint's are left out (their relative figures divide by
@@ -558,7 +556,7 @@ def _observer_figures(
     used = peak >= 0.1 * peak.max()
     error = (estimate - truth)[:, used]
     rms = np.sqrt(np.mean(error**2, axis=0)) / peak[used]
-    joint_moving = np.abs(sim.qd_true[moving][:, used]) > JOINT_MOVING
+    joint_moving = np.abs(sim.qd_true[moving][:, used]) > MOVING_SPEED
     if not np.any(joint_moving):
         return _ObserverFigures(float(rms.mean()), np.nan, np.nan, np.nan)
     relative_std = std[:, used] / peak[used]
