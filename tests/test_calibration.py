@@ -612,3 +612,42 @@ def test_the_column_medians_are_numpys_nanmedian():
         with pytest.warns(RuntimeWarning):  # NumPy's, for the column of NaNs
             expected = np.nanmedian(values, axis=0)
         np.testing.assert_array_equal(calibration._column_medians(values), expected)
+
+
+def test_the_settings_follow_a_slower_control_period():
+    """At 125 Hz the loop's bandwidth drops to what its delay allows, the stroke grows alike."""
+    defaults = CalibrationParameters()
+    assert defaults.at_period(0.004) is defaults and defaults.at_period(0.001) is defaults
+    slow = defaults.at_period(0.008)
+    assert 3.5 < slow.bandwidth < 4.5
+    assert slow.stroke * slow.bandwidth == pytest.approx(defaults.stroke * defaults.bandwidth)
+    assert slow.frequency / slow.bandwidth == pytest.approx(defaults.frequency / defaults.bandwidth)
+    controller = LeadThrough(lt.robots.yumi(), dt=0.008, calibrate=True)
+    assert controller.calibration_parameters == slow
+    assert controller.calibration_time == pytest.approx(slow.duration)
+    assert LeadThrough(lt.robots.yumi(), dt=0.008).calibration_time == 0.0
+
+
+@pytest.mark.parametrize("physics, seed", [("dry", 1), ("dry", 4), ("lugre", 3)])
+def test_at_125_hz_the_calibration_is_accepted_where_the_250_hz_settings_were_not(
+    yumi, physics, seed, monkeypatch
+):
+    """Plants of the guiding benchmark at 125 Hz (delays 1–2 periods, 8–16 ms).
+
+    With the 250 Hz settings (6 Hz, 10 mrad) the wrist jumped 42–48 mrad off the motion
+    (refused: touched?) or the shoulder ran at 2.1 rad/s (refused: stopped, held).
+    """
+    plant = sample_plant(yumi, seed, physics)
+    config = dataclasses.replace(plant.config, control_dt=0.008)
+
+    def calibrate() -> Calibration:
+        controller = LeadThrough(yumi, dt=0.008, calibrate=True)
+        simulate(DigitalTwin(yumi, config), controller, controller.calibration_time + 0.1)
+        assert controller.calibration is not None
+        return controller.calibration
+
+    assert calibrate().accepted
+    monkeypatch.setattr(CalibrationParameters, "at_period", lambda self, dt: self)
+    refused = calibrate()
+    assert not refused.accepted and ("off the calibration motion" in refused.reason
+                                     or "faster than" in refused.reason)  # fmt: skip

@@ -1,9 +1,16 @@
 """Joint tracking: computed torque, a PD whose gains are the inertia matrix of the pose."""
 
 import numpy as np
+import pytest
 
 import leadthrough as lt
-from leadthrough.control.tracking import JointTracker
+from leadthrough.control.tracking import (
+    VERIFIED_PERIOD,
+    JointTracker,
+    loop_damping,
+    pd_gains,
+    period_bandwidth,
+)
 
 
 def test_gains_follow_the_inertia_of_the_current_pose():
@@ -56,3 +63,27 @@ def test_coupled_joints_keep_the_bandwidth_where_two_axes_align():
     np.testing.assert_allclose(loop, (2.0 * np.pi * 4.0) ** 2, rtol=1e-9)
     per_joint = np.linalg.eigvals(np.linalg.solve(mass, np.diag(np.diag(mass)))).real
     assert per_joint.max() > 5.0  # what per-joint gains would have multiplied ω² by
+
+
+def test_the_loop_model_has_the_damping_of_a_pd_on_a_double_integrator():
+    """Without delay, filter or sampling to speak of, the loop is q̈ = −ω² q − 2ζω q̇: ζ."""
+    for zeta in (0.3, 0.7):
+        gains = pd_gains(zeta)(2.0 * np.pi * 4.0)
+        damping = loop_damping(gains, 1e-6, delay=0, velocity_cutoff=1e7)
+        assert damping == pytest.approx(zeta, rel=1e-3)
+
+
+def test_a_slower_rate_leaves_the_loop_less_damping_and_the_bandwidth_keeps_it():
+    """The period's bandwidth: the ceiling up to 250 Hz; slower, the largest with its margin."""
+    gains = pd_gains()
+    verified = loop_damping(gains(2.0 * np.pi * 6.0), VERIFIED_PERIOD)
+    assert loop_damping(gains(2.0 * np.pi * 6.0), 0.008) < 0.0  # 6 Hz at 125 Hz: it grows
+    assert period_bandwidth(6.0, 0.001, gains) == period_bandwidth(6.0, 0.004, gains) == 6.0
+    previous = 6.0
+    for dt in (0.005, 0.008, 0.01, 0.02):
+        bandwidth = period_bandwidth(6.0, dt, gains)
+        assert bandwidth < previous
+        assert loop_damping(gains(2.0 * np.pi * bandwidth), dt) >= verified
+        assert loop_damping(gains(2.0 * np.pi * 1.01 * bandwidth), dt) < verified
+        previous = bandwidth
+    assert period_bandwidth(6.0, 0.008, gains) == pytest.approx(3.92, abs=0.02)

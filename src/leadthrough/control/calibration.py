@@ -88,6 +88,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from leadthrough.control.tracking import pd_gains, period_bandwidth
 from leadthrough.errors import ParameterError
 from leadthrough.estimation.momentum_balance import MomentumBalance, stretch_readings
 from leadthrough.friction.measured_level import MeasuredLevelError
@@ -139,12 +140,14 @@ class CalibrationParameters:
             count as sliding at the motion's pace (faster, a joint is jumping).
         cycles: Back-and-forth cycles [–].
         settle_time: Rest before the motion, for the observer to settle [s].
-        bandwidth: Bandwidth of the joint tracking [Hz]: stiff enough that the lightest
-            joint breaks away within a fraction of the stroke (below 6 Hz the YuMi's wrist
-            sticks 20 mrad off on 2 of the 8 plants of ``benchmarks/guiding_quality.py``),
-            soft enough for a delayed, filtered velocity (above it the wrist's stick-slip
-            bursts pass 1 rad/s on 2 of 8). At 6 Hz all 8 calibrated with the 5 mrad
-            motion, and all 64 of seeds 1–32 calibrate with the 10 mrad one.
+        bandwidth: Bandwidth of the joint tracking at 250 Hz and faster [Hz]: stiff enough
+            that the lightest joint breaks away within a fraction of the stroke (below 6 Hz
+            the YuMi's wrist sticks 20 mrad off on 2 of the 8 plants of
+            ``benchmarks/guiding_quality.py``), soft enough for a delayed, filtered velocity
+            (above it the wrist's stick-slip bursts pass 1 rad/s on 2 of 8). At 6 Hz all 8
+            calibrated with the 5 mrad motion, and all 64 of seeds 1–32 calibrate with the
+            10 mrad one. At a slower rate the loop's delay allows less
+            (:meth:`at_period`).
         max_speed: Fastest a joint may move during the calibration [rad/s]; faster,
             the calibration stops (refused) and the arm is held against gravity. 20× the
             motion's speed, between what a stick-slip jump reaches and a runaway: a light
@@ -227,6 +230,24 @@ class CalibrationParameters:
         if self.max_payload is not None:
             return self.max_payload
         return PAYLOAD_SHARE * robot.total_mass
+
+    def at_period(self, dt: float) -> CalibrationParameters:
+        """These settings for a control period ``dt`` [s]: the same at 250 Hz and faster.
+
+        Slower, the tracking's bandwidth drops to what the loop's delay allows
+        (:func:`~leadthrough.control.tracking.period_bandwidth`: 6 Hz → 3.96 Hz at
+        125 Hz, 3.41 Hz at 100 Hz), and the stroke grows by as much, so that the motion
+        stays as slow beside its loop (a 20 % longer run at 125 Hz) and the 4-stroke
+        check as far from the stick-slip jumps a slower loop lets a light joint make. With
+        6 Hz and 10 mrad at 125 Hz, 5 of the 8 plants of seeds 1–4 were refused (joints 42–48
+        mrad off, one at 2.1 rad/s); with 3.96 Hz alone, 2 of 16 at 100 Hz (40–41 mrad);
+        with both, none of 16 at 125 or 100 Hz.
+        """
+        bandwidth = period_bandwidth(self.bandwidth, dt, calibration_gains)
+        if bandwidth == self.bandwidth:
+            return self
+        return dataclasses.replace(self, bandwidth=bandwidth,
+                                   stroke=self.stroke * self.bandwidth / bandwidth)  # fmt: skip
 
     @property
     def frequency(self) -> float:
@@ -433,6 +454,12 @@ def implausible_friction(scale: FloatArray, max_change: float) -> NDArray[np.boo
     return (scale > limit) | (scale < 1.0 / limit)
 
 
+#: The calibration's tracking gains per unit of M(q) for a bandwidth ω [rad/s]: stiffness
+#: ω², damping 2ζω with ζ = 1, and an integral ω³/4 that holds a load the model does not
+#: know (a payload) within the stroke.
+calibration_gains = pd_gains(1.0, 0.25)
+
+
 class CalibrationRun:
     """The calibration motion around the pose the arm rests at, and its readings.
 
@@ -461,10 +488,7 @@ class CalibrationRun:
         low, high = dynamics.robot.q_min, dynamics.robot.q_max
         # move into the side with more room (a joint resting near a limit moves away from it)
         self._direction = np.where(high - self.pose >= self.pose - low, 1.0, -1.0)
-        omega = 2.0 * np.pi * self.parameters.bandwidth
-        # per unit of M(q): stiffness ω², damping 2ζω (ζ = 1), and an integral ω³/4 that
-        # holds a load the model does not know (a payload) within the stroke
-        self._gains = (omega**2, 2.0 * omega, omega**3 / 4.0)
+        self._gains = calibration_gains(2.0 * np.pi * self.parameters.bandwidth)
         self._error_integral = np.zeros_like(self.pose)
         self._last_t = 0.0
         self.disturbance: str | None = None  # why the calibration must stop, if it must

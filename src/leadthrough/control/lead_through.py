@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from leadthrough.compiled import kernel
 from leadthrough.control.active_law import ActiveLaw
-from leadthrough.control.calibration import Calibration, CalibrationRun
+from leadthrough.control.calibration import Calibration, CalibrationParameters, CalibrationRun
 from leadthrough.control.constraints import VirtualConstraint, constraint_torque
 from leadthrough.control.feedforward import DelayLine, FeedForwardTorques, PassiveFeedForward
 from leadthrough.control.parameters import LeadThroughParameters, Mode
@@ -274,8 +274,18 @@ class LeadThrough:
     @property
     def calibration_time(self) -> float:
         """How long the start-up calibration lasts [s] (0 without one)."""
-        calibration = self.parameters.calibration
+        calibration = self.calibration_parameters
         return calibration.duration if self.calibrate and calibration is not None else 0.0
+
+    @property
+    def calibration_parameters(self) -> CalibrationParameters | None:
+        """The start-up calibration's settings at this controller's period (None: none).
+
+        ``parameters.calibration`` at 250 Hz and faster; slower, its tracking bandwidth and
+        stroke follow the period (:meth:`CalibrationParameters.at_period`).
+        """
+        calibration = self.parameters.calibration
+        return None if calibration is None else calibration.at_period(self.dt)
 
     def reset(self) -> None:
         """Start afresh: nominal model, filters, references, bias and calibration.
@@ -430,7 +440,7 @@ class LeadThrough:
         q, qd = model.q, model.qd
         if self._calibration_run is None:
             self._calibration_run = CalibrationRun(self.dynamics, self.friction, q,
-                                                   self.parameters.calibration,
+                                                   self.calibration_parameters,
                                                    self.parameters.gravity_uncertainty)  # fmt: skip
             self._calibration_start = t
         run, elapsed = self._calibration_run, t - self._calibration_start

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.polynomial import polynomial
 from numpy.typing import ArrayLike
 
-from leadthrough.control.tracking import JointTracker
+from leadthrough.control.tracking import JointTracker, pd_gains, period_bandwidth
 from leadthrough.control.warm_up import exercise
 from leadthrough.errors import ParameterError, ReplayError, failure
 from leadthrough.friction.model import FrictionModel
@@ -47,9 +47,13 @@ class ReplayParameters:
         approach_time: Duration of the minimum-jerk move to the path start [s].
         margin: The path must stay this far inside the position limits [rad] (the
             supervisor's soft walls start ``soft_limit_margin`` inside them).
-        bandwidth: Bandwidth of the tracking PD [Hz] (see :class:`JointTracker`).
+        bandwidth: Bandwidth of the tracking PD at 250 Hz and faster [Hz] (see
+            :class:`JointTracker`); at a slower rate, what the loop's delay allows
+            (:func:`~leadthrough.control.tracking.period_bandwidth`: 3.96 Hz at 125 Hz).
         integral_time: Integral action ``K_I = K_P / integral_time`` [s] for the friction
-            the model lacks (stiction, the cable effect); 0 turns it off.
+            the model lacks (stiction, the cable effect), at ``bandwidth``; where the
+            period lowers the bandwidth, the time grows as much (the loop keeps its
+            shape); 0 turns it off.
     """
 
     smoothing_time: float = 0.05
@@ -58,7 +62,7 @@ class ReplayParameters:
     pause_time: float = 0.3
     approach_time: float = 2.0
     margin: float = 0.02
-    bandwidth: float = 6.0
+    bandwidth: float = 4.0
     integral_time: float = 0.1
 
     def __post_init__(self) -> None:
@@ -296,8 +300,11 @@ class Replayer:
         self.parameters = p = parameters or plan.parameters
         self.supervisor = supervisor or SafetySupervisor(dynamics, self.dt)
         self.supervisor.hold()
-        self.tracker = JointTracker(dynamics, p.bandwidth, 1.0, plan.q[0])
-        self.ki = self.tracker.kp / p.integral_time if p.integral_time > 0.0 else 0.0
+        # the integral a fixed share of ω³, as at the bandwidth asked for (K_P / integral_time)
+        share = 1.0 / (p.integral_time * 2.0 * np.pi * p.bandwidth) if p.integral_time else 0.0
+        bandwidth = period_bandwidth(p.bandwidth, self.dt, pd_gains(1.0, share))
+        self.tracker = JointTracker(dynamics, bandwidth, 1.0, plan.q[0])
+        self.ki = self.tracker.kp * share * 2.0 * np.pi * bandwidth
         self.integral = np.zeros(dynamics.n)
         self._integral_limit = INTEGRAL_LIMIT * self.friction.coulomb
         self.time, self._steps = 0.0, 0

@@ -9,15 +9,119 @@ as the arm folds (the YuMi's joint 3 by 4×) keeps its bandwidth, and coupled jo
 too. Per-joint gains ``m_ii(q) ω²`` give a loop gain ``ω² M⁻¹ diag(M)`` instead, whose
 eigenvalues grow without bound near a pose where two joint axes align (the Panda's
 joints 1 and 3 at q₂ = 0: the excitation of its joint 2 ran away at 4.3 rad/s).
+
+A bandwidth is chosen for a control period. The loop's delay is counted in periods (the
+command acts one period after the sample, over a period, on a velocity the robot
+low-passes): at a slower rate the same bandwidth leaves less phase, and at 125 Hz the
+6 Hz start-up calibration ran away or jumped 42–48 mrad off its 10 mrad stroke on 5 of
+the 8 plants of seeds 1–4 (``benchmarks/guiding_quality.py --dt 0.008``).
+:func:`period_bandwidth` gives the bandwidth that keeps, at a slower rate, the damping the
+loop has at :data:`VERIFIED_PERIOD`, where the defaults were verified on the plant family;
+:func:`loop_damping` is that loop, linearised.
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from leadthrough.model.description import FloatArray
 from leadthrough.model.dynamics import Dynamics
+
+#: Control period at which the tracking bandwidths were chosen and verified on the plant
+#: family of ``benchmarks/guiding_quality.py`` (the calibration's 6 Hz, the replay's) [s].
+VERIFIED_PERIOD = 0.004
+#: Periods between a sample and the command it gives reaching the drive, in the loop model
+#: of :func:`loop_damping` [–] (the plant family's delays are 1–2 periods).
+LOOP_DELAY = 1
+#: Cut-off of the low-pass the loop model assumes in the robot's joint velocity [Hz]: the
+#: slowest of the plant family (15–40 Hz, a differenced encoder filtered).
+VELOCITY_CUTOFF = 15.0
+
+#: The tracker's bandwidth at :data:`VERIFIED_PERIOD` [Hz] (4 Hz suits 250 Hz control with
+#: a one-period delay; :func:`period_bandwidth` gives it at another period).
+BANDWIDTH = 4.0
+
+#: Gains per unit inertia of a bandwidth ω [rad/s]: (K_P [1/s²], K_D [1/s], K_I [1/s³]).
+LoopGains = Callable[[float], tuple[float, float, float]]
+
+
+def pd_gains(damping_ratio: float = 1.0, integral_share: float = 0.0) -> LoopGains:
+    """``ω ↦ (ω², 2ζω, s ω³)``: a PD of damping ratio ζ and an integral of share s [–].
+
+    With the integral a fixed share of ω³ the loop keeps its shape at any bandwidth
+    (``K_I = K_P / T_I`` with ``T_I = 1 / (s ω)``).
+    """
+
+    def gains(omega: float) -> tuple[float, float, float]:
+        return omega**2, 2.0 * damping_ratio * omega, integral_share * omega**3
+
+    return gains
+
+
+def loop_damping(
+    gains: tuple[float, float, float],
+    dt: float,
+    delay: int = LOOP_DELAY,
+    velocity_cutoff: float = VELOCITY_CUTOFF,
+) -> float:
+    """Least damping ratio of one joint's tracking loop, linearised [–] (< 0: it grows).
+
+    Per unit inertia (computed torque leaves each mode a double integrator): the
+    controller samples the position and a velocity low-passed at ``velocity_cutoff``
+    [Hz], commands ``K_P e − K_D v + K_I ∫e`` (``gains``, per unit inertia), and the
+    command acts ``delay`` periods later, held over a period ``dt`` [s]. Each eigenvalue
+    λ of the map over one period is a mode ``s = ln(λ) / dt`` of damping ratio
+    ``−Re(s) / |s|``.
+    """
+    from scipy.linalg import expm  # not at import: ``import leadthrough`` stays light
+
+    stiffness, damping, integral = gains
+    cutoff = 2.0 * np.pi * velocity_cutoff
+    arm = np.array([[0.0, 1.0, 0.0, 0.0],  # q, q̇, the filtered velocity, and the torque
+                    [0.0, 0.0, 0.0, 1.0],
+                    [0.0, cutoff, -cutoff, 0.0],
+                    [0.0, 0.0, 0.0, 0.0]])  # fmt: skip
+    held = expm(arm * dt)[:3]  # over one period, the torque held
+    has_integral = integral != 0.0
+
+    def step(x: FloatArray) -> FloatArray:
+        q, qd, v = x[:3]
+        accumulated = x[3] - dt * q if has_integral else 0.0  # ∫e, e = −q
+        queue = list(x[3 + has_integral :])
+        queue.append(-stiffness * q - damping * v + integral * accumulated)
+        moved = held @ np.array([q, qd, v, queue.pop(0)])
+        return np.array([*moved, *([accumulated] if has_integral else []), *queue])
+
+    size = 3 + has_integral + delay
+    eigenvalues = np.linalg.eigvals(np.column_stack([step(unit) for unit in np.eye(size)]))
+    modes = np.log(eigenvalues[np.abs(eigenvalues) > 1e-12].astype(complex)) / dt
+    return float(np.min(-modes.real / np.abs(modes)))
+
+
+def period_bandwidth(ceiling: float, dt: float, gains: LoopGains) -> float:
+    """The bandwidth [Hz] a loop of ``gains`` may have at period ``dt`` [s].
+
+    ``ceiling`` [Hz] at :data:`VERIFIED_PERIOD` or faster; at a slower rate, the largest
+    bandwidth whose :func:`loop_damping` is no less than the ceiling's at
+    :data:`VERIFIED_PERIOD` (125 Hz: 6 Hz → 3.96 Hz for a PD with ζ = 1).
+    """
+    if dt <= VERIFIED_PERIOD:
+        return ceiling
+
+    def damping(bandwidth: float) -> float:
+        return loop_damping(gains(2.0 * np.pi * bandwidth), dt)
+
+    verified = loop_damping(gains(2.0 * np.pi * ceiling), VERIFIED_PERIOD)
+    low, high = 0.0, ceiling
+    if damping(high) >= verified:
+        return ceiling
+    while high - low > 1e-4 * ceiling:  # bisection: the damping falls as the bandwidth rises
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if damping(middle) >= verified else (low, middle)
+    return low
 
 
 class JointTracker:
@@ -35,7 +139,7 @@ class JointTracker:
     def __init__(
         self,
         dynamics: Dynamics,
-        bandwidth: float = 4.0,
+        bandwidth: float = BANDWIDTH,
         damping_ratio: float = 1.0,
         reference_pose: ArrayLike | None = None,
     ) -> None:

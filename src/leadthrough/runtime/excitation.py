@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from leadthrough.control.tracking import JointTracker
+from leadthrough.control.tracking import BANDWIDTH, JointTracker, pd_gains, period_bandwidth
 from leadthrough.errors import ParameterError
 from leadthrough.model.description import FloatArray
 from leadthrough.model.dynamics import Dynamics
@@ -111,7 +111,7 @@ def excite_joint(
     stroke = run.peak_velocity / (4.0 * frequency)
     start = hold.copy()
     start[joint] = 0.5 * (low + high) - 0.5 * stroke
-    tracker = JointTracker(dynamics)
+    tracker = JointTracker(dynamics, period_bandwidth(BANDWIDTH, robot.dt, pd_gains()))
     _move_to(robot, tracker, start, progress)
     return _run_wave(robot, tracker, joint, run, frequency, start, progress)
 
