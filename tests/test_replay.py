@@ -13,20 +13,17 @@ from leadthrough.control.replay import (
     replay_errors,
 )
 from leadthrough.errors import ParameterError, ReplayError
+from leadthrough.experiments import replay_quality
 from leadthrough.safety.supervisor import SafetySupervisor, SupervisorState
-from leadthrough.trajectories import minimum_jerk_phase
 from leadthrough.twin.model_error import ModelError
 from leadthrough.twin.runner import simulate
-from leadthrough.twin.sensors import SensorModel
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig
 
 ROBOT = lt.robots.yumi()
 N = ROBOT.n_joints
 DT = 0.004
 HOME = ROBOT.home()
-#: The taught path: rest, move, 0.5 s pause, move, 0.5 s pause, move, rest (6 s in all).
-PIECES = (("rest", 0.2), ("move", 1.5), ("rest", 0.5), ("move", 1.5), ("rest", 0.5),
-          ("move", 1.6), ("rest", 0.2))  # fmt: skip
+#: The taught path's pauses (:data:`~leadthrough.experiments.replay_quality.PIECES`).
 PAUSES = ((1.7, 2.2), (3.7, 4.2))  # [s]
 
 
@@ -39,25 +36,10 @@ def dyn() -> lt.Dynamics:
 def taught_path() -> tuple[np.ndarray, np.ndarray]:
     """A 6 s taught path at 250 Hz: every joint moves 0.2–0.4 rad around home, two pauses.
 
-    Minimum-jerk moves between four poses, read through the twin's encoder quantisation.
+    Minimum-jerk moves between four poses, read through the twin's encoder quantisation
+    (:func:`~leadthrough.experiments.replay_quality.taught_path`).
     """
-    stroke = np.array([0.3, 0.25, 0.4, 0.3, 0.35, 0.3, 0.2]) * np.array([1, -1, 1, 1, -1, 1, -1])
-    poses = [HOME - stroke / 2, HOME + stroke / 2, HOME - stroke / 4 * (-1) ** np.arange(N),
-             HOME + stroke / 3]  # fmt: skip
-    t = np.arange(1501) * DT
-    q, start, pose = np.empty((len(t), N)), 0.0, 0
-    for kind, duration in PIECES:
-        inside = (t >= start - 1e-9) & (t < start + duration - 1e-9)
-        if kind == "move":
-            phase, _ = minimum_jerk_phase(t[inside] - start, duration)
-            q[inside] = poses[pose] + np.outer(phase, poses[pose + 1] - poses[pose])
-            pose += 1
-        else:
-            q[inside] = poses[pose]
-        start += duration
-    q[-1] = poses[-1]
-    quantum = SensorModel().quantum(ROBOT)
-    return t, np.round(q / quantum) * quantum
+    return replay_quality.taught_path(ROBOT, DT)
 
 
 def sinusoid(amplitude: float = 0.2, frequency: float = 0.2, duration: float = 6.0):
@@ -307,3 +289,26 @@ def test_integral_action_takes_the_friction_the_model_lacks(dyn):
         runs[integral_time] = replay_errors(plan, run.q_true, run.t)["joint_rms"]
     print(f"\njoint RMS with integral {runs[0.1] * 1e3:.3f} mrad, without {runs[0.0] * 1e3:.3f}")
     assert runs[0.1] < 0.6 * runs[0.0]
+
+
+def test_the_replay_holds_on_a_plant_with_two_periods_of_delay():
+    """Lugre #3 of the guiding benchmark at 250 Hz (2 periods of delay, ~15 Hz velocity filter).
+
+    What the 4 Hz default prevents: at 6 Hz (the default before) the tracking loop of its
+    wrist grows until the supervisor faults (the loop model: damping ratio −0.02).
+    """
+    replayed = replay_quality.replay_on_plant(ROBOT, 3, "lugre")
+    assert replayed.delay == 2 and not replayed.faulted
+    assert replayed.joint_rms < 5e-3 and replayed.tool_rms < 1e-3
+    six_hertz = ReplayParameters(bandwidth=6.0)
+    assert replay_quality.replay_on_plant(ROBOT, 3, "lugre", parameters=six_hertz).faulted
+
+
+def test_at_125_hz_the_replay_tracks_with_the_bandwidth_its_delay_allows(monkeypatch):
+    """Lugre #2 at 125 Hz: the period's bandwidth (2.8 Hz) replays; 4 Hz there faults."""
+    from leadthrough.control import replay
+
+    replayed = replay_quality.replay_on_plant(ROBOT, 2, "lugre", dt=0.008)
+    assert not replayed.faulted and replayed.joint_rms < 10e-3 and replayed.tool_rms < 2e-3
+    monkeypatch.setattr(replay, "period_bandwidth", lambda ceiling, dt, gains: ceiling)
+    assert replay_quality.replay_on_plant(ROBOT, 2, "lugre", dt=0.008).faulted
