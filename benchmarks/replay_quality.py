@@ -5,7 +5,7 @@ taught path (:func:`leadthrough.experiments.replay_quality.taught_path`) on each
 the guiding benchmark's family, both friction physics, at a control period::
 
     PYTHONPATH=src:benchmarks python benchmarks/replay_quality.py [--seeds 1-8] [--dt 0.008]
-        [--bandwidth HZ]
+        [--bandwidth HZ] [--robot NAME]
 
 ``--bandwidth`` sets ``ReplayParameters.bandwidth`` (the tracking's at 250 Hz and faster).
 """
@@ -16,8 +16,8 @@ import argparse
 
 import numpy as np
 
-import leadthrough as lt
 from guiding_quality import parse_seeds
+from leadthrough.cli.arguments import add_robot_arguments, robot_from
 from leadthrough.control.replay import ReplayParameters
 from leadthrough.experiments.replay_quality import replay_on_plant
 
@@ -28,9 +28,10 @@ def main() -> None:
     parser.add_argument("--seeds", default="1-8", help="plant seeds, e.g. 1-8 or 5,9")
     parser.add_argument("--dt", type=float, default=0.004, help="control period [s]")
     parser.add_argument("--bandwidth", type=float, help="tracking bandwidth [Hz]")
+    add_robot_arguments(parser)  # --robot, --tip, --drive-data, as the command line's
     args = parser.parse_args()
     parameters = None if args.bandwidth is None else ReplayParameters(bandwidth=args.bandwidth)
-    robot = lt.robots.yumi()
+    robot = robot_from(args)
     rows = []
     print(f"{'plant':10s} {'delay':>5s} {'fault':>5s} {'joint RMS':>9s} {'max':>7s} "
           f"{'tool RMS':>8s} {'peak':>6s}   [mrad, mm, rad/s]")  # fmt: skip
