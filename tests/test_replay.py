@@ -291,6 +291,24 @@ def test_integral_action_takes_the_friction_the_model_lacks(dyn):
     assert runs[0.1] < 0.6 * runs[0.0]
 
 
+@pytest.mark.parametrize("integral_time", [0.1, 0.05, 0.0])
+def test_the_gains_are_the_bandwidths_at_250_hz_and_softer_at_125_hz(dyn, integral_time):
+    """K_I = K_P / integral_time at 250 Hz; at 125 Hz lower gains, the integral's share kept."""
+    plan = plan_replay(
+        *taught_path(), dyn, parameters=ReplayParameters(integral_time=integral_time)
+    )
+    fast, slow = Replayer(plan, dyn, dt=0.004), Replayer(plan, dyn, dt=0.008)
+    omega = 2.0 * np.pi * plan.parameters.bandwidth
+    np.testing.assert_allclose(fast.tracker.kp, np.diag(dyn.mass(plan.q[0])) * omega**2)
+    expected = fast.tracker.kp / integral_time if integral_time else np.zeros(N)
+    np.testing.assert_allclose(fast.ki, expected)
+    assert np.all(slow.tracker.kp > 0.0) and np.all(slow.tracker.kp < 0.6 * fast.tracker.kp)
+    # K_I / (K_P ω) is the loop's shape: the same at both rates
+    slow_omega = omega * np.sqrt(slow.tracker.kp[0] / fast.tracker.kp[0])
+    np.testing.assert_allclose(slow.ki / (slow.tracker.kp * slow_omega),
+                               fast.ki / (fast.tracker.kp * omega))  # fmt: skip
+
+
 def test_the_replay_holds_on_a_plant_with_two_periods_of_delay():
     """Lugre #3 of the guiding benchmark at 250 Hz (2 periods of delay, ~15 Hz velocity filter).
 

@@ -237,7 +237,7 @@ class CalibrationParameters:
         Slower, the tracking's bandwidth drops to what the loop's delay allows
         (:func:`~leadthrough.control.tracking.period_bandwidth`: 6 Hz → 3.96 Hz at
         125 Hz, 3.41 Hz at 100 Hz), and the stroke grows by as much, so that the motion
-        stays as slow beside its loop (a 20 % longer run at 125 Hz) and the 4-stroke
+        stays as slow beside its loop (the run 1.3 s instead of 0.9 s at 125 Hz) and the 4-stroke
         check as far from the stick-slip jumps a slower loop lets a light joint make. With
         6 Hz and 10 mrad at 125 Hz, 5 of the 8 plants of seeds 1–4 were refused (joints 42–48
         mrad off, one at 2.1 rad/s); with 3.96 Hz alone, 2 of 16 at 100 Hz (40–41 mrad);

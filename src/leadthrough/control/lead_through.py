@@ -125,6 +125,9 @@ class LeadThrough:
                 raise ParameterError("constraints", f"expected VirtualConstraint objects, got "
                                      f"{type(constraint).__name__}")  # fmt: skip
         self.calibrate = bool(calibrate)
+        calibration = parameters.calibration  # at this period: computed once, here
+        self._calibration_parameters = (None if calibration is None
+                                        else calibration.at_period(self.dt))  # fmt: skip
         self.supervisor = SafetySupervisor(Dynamics(robot), dt, parameters.safety)
         self.law = self.law_class(robot, parameters, self.dt, friction)
         self.reset()
@@ -282,10 +285,10 @@ class LeadThrough:
         """The start-up calibration's settings at this controller's period (None: none).
 
         ``parameters.calibration`` at 250 Hz and faster; slower, its tracking bandwidth and
-        stroke follow the period (:meth:`CalibrationParameters.at_period`).
+        stroke follow the period (:meth:`CalibrationParameters.at_period`, computed when
+        the controller is built, not in a control period).
         """
-        calibration = self.parameters.calibration
-        return None if calibration is None else calibration.at_period(self.dt)
+        return self._calibration_parameters
 
     def reset(self) -> None:
         """Start afresh: nominal model, filters, references, bias and calibration.

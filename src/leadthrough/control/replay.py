@@ -49,7 +49,7 @@ class ReplayParameters:
             supervisor's soft walls start ``soft_limit_margin`` inside them).
         bandwidth: Bandwidth of the tracking PD at 250 Hz and faster [Hz] (see
             :class:`JointTracker`); at a slower rate, what the loop's delay allows
-            (:func:`~leadthrough.control.tracking.period_bandwidth`: 3.96 Hz at 125 Hz).
+            (:func:`~leadthrough.control.tracking.period_bandwidth`: 2.8 Hz at 125 Hz).
         integral_time: Integral action ``K_I = K_P / integral_time`` [s] for the friction
             the model lacks (stiction, the cable effect), at ``bandwidth``; where the
             period lowers the bandwidth, the time grows as much (the loop keeps its
