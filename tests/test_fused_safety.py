@@ -131,11 +131,14 @@ def test_checked_count_agrees_with_in_range_then_update():
     outcomes, previous = set(), None
     for k in range(5000):
         readings = [rng.uniform(-1.05, 1.05, 7) * high[:7] for _ in range(3)]
+        if rng.random() < 0.5:  # velocities of an arm at rest: only a whole sample is stale
+            readings[1] *= 1e-3
         if previous is not None and rng.random() < 0.4:  # the same sample again
             readings = [reading.copy() for reading in previous]
         for reading in readings:
             if rng.random() < 0.05:
-                reading[rng.integers(7)] = rng.choice([np.nan, np.inf, -np.inf, 1.0, -1.0])
+                bad = rng.choice([np.nan, np.inf, -np.inf, 1.0, -1.0])
+                reading[rng.integers(reading.size)] = bad
         if rng.random() < 0.03:
             readings[rng.integers(3)] = np.zeros(rng.choice([6, 8]))
         previous = readings
@@ -145,13 +148,13 @@ def test_checked_count_agrees_with_in_range_then_update():
             reference.clear()
         count = checked.count(readings[0], readings[1], tau, low, high)
         if in_range(tuple(readings[:2] if tau is None else readings), low, high, 7):
-            expected = reference.update(readings[0], readings[1])
+            expected = reference.update(readings[0], readings[1], tau)
             assert checked.reason(count) == expected and count != OUT_OF_RANGE
         else:
             assert count == OUT_OF_RANGE
         np.testing.assert_array_equal(checked._runs, reference._runs)
-        outcomes.add(count if count < 0 else "frozen")
-    assert outcomes == {OUT_OF_RANGE, -1, "frozen"}
+        outcomes.add(count if count < 0 else ("stale" if count == 7 else "frozen"))
+    assert outcomes == {OUT_OF_RANGE, -1, "frozen", "stale"}
 
 
 @pytest.mark.parametrize("case", [name for name in CASES if not name.startswith("twin")])

@@ -9,7 +9,9 @@ import pytest
 
 import leadthrough as lt
 from leadthrough.errors import ParameterError
+from leadthrough.safety.checks import FrozenEncoders
 from leadthrough.safety.supervisor import SafetyParameters, SafetySupervisor, SupervisorState
+from realdata import REALDATA, needs_realdata
 
 DT = 0.004
 ROBOT = lt.robots.yumi()
@@ -103,7 +105,9 @@ def test_frozen_encoder_faults_after_exactly_stale_periods(dyn):
         q, qd = MID.copy(), rng.normal(0.0, 1e-4, N)
         qd[3] = 0.0123
         assert sup.check(k * DT, q, qd) == (k < 9)
-    assert sup.fault_reason == "joint 4 encoder frozen: q and qd identical for 10 samples"
+    assert sup.fault_reason == (
+        "joint 4 encoder frozen: q and qd identical for 10 samples, qd above 0.01 rad/s"
+    )
 
 
 def test_noisy_samples_at_rest_never_look_frozen(sup):
@@ -117,10 +121,62 @@ def test_noisy_samples_at_rest_never_look_frozen(sup):
 def test_frozen_counter_restarts_on_reset(dyn):
     """After reset() a frozen encoder needs stale_periods new samples to fault again."""
     sup = SafetySupervisor(dyn, DT, SafetyParameters(stale_periods=5))
-    results = [sup.check(k * DT, MID, np.zeros(N)) for k in range(5)]
+    moving = np.full(N, 0.02)  # the velocity readings say every joint moves
+    results = [sup.check(k * DT, MID, moving) for k in range(5)]
     sup.reset()
-    results += [sup.check(k * DT, MID, np.zeros(N)) for k in range(5)]
+    results += [sup.check(k * DT, MID, moving) for k in range(5)]
     assert results == [True] * 4 + [False] + [True] * 4 + [False]
+
+
+def test_an_arm_at_rest_repeating_its_readings_exactly_never_faults(dyn):
+    """A real arm at rest repeats q and q̇ bit for bit; its torque readings stay noisy.
+
+    What the check prevents (before, (q, q̇) of one joint repeated 25 times faulted): a
+    UR10e standing still faults within 0.25 s (the real logs, below).
+    """
+    sup = SafetySupervisor(dyn, DT)
+    rng = np.random.default_rng(3)
+    still = np.full(N, 1e-4)  # a resting joint's velocity reading, repeated
+    for k in range(1000):
+        assert sup.check(k * DT, MID, still, rng.normal(0.0, 0.01, N))
+    for k in range(1000, 2000):  # and without a torque measurement
+        assert sup.check(k * DT, MID, still)
+
+
+def test_a_stale_sample_faults_after_exactly_stale_periods(dyn):
+    """q, q̇ and τ of every joint repeated stale_periods times: stale data, safe stop."""
+    sup = SafetySupervisor(dyn, DT, SafetyParameters(stale_periods=10))
+    tau = np.random.default_rng(4).normal(0.0, 0.01, N)
+    for k in range(10):
+        assert sup.check(k * DT, MID, np.zeros(N), tau) == (k < 9)
+    assert sup.fault_reason == ("sensor data stale: q, qd and torque of every joint identical "
+                                "for 10 samples")  # fmt: skip
+
+
+@needs_realdata
+@pytest.mark.parametrize("name", ["validation/ur-20_01_17-p1.csv",
+                                  "jointwise/ur-20_01_22-joint_1.csv"])  # fmt: skip
+def test_a_real_ur10e_at_rest_and_moving_one_joint_never_faults(name):
+    """Its logs streamed through the controller: no fault (per joint (q, q̇) faulted at 0.25 s).
+
+    A static hold, and a run that moves joint 1 while the others rest for seconds with
+    their readings repeated exactly (joint 2 for up to 5.6 s).
+    """
+    import warnings
+
+    robot = lt.robots.ur10e()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the log reader's notes on this run: not tested here
+        log = lt.read_log(REALDATA / "ur10e" / name, robot)
+    controller = lt.LeadThrough(robot, mode="passive", dt=log.median_period)
+    old_rule = FrozenEncoders(robot.n_joints, 25, speed=-1.0)  # every repeat counted
+    faulted_before = None
+    for k in range(log.n_samples):
+        controller.step(lt.JointState(float(log.t[k]), log.q[k], log.qd[k], log.tau[k]))
+        assert controller.state is not SupervisorState.FAULT, controller.supervisor.fault_reason
+        if faulted_before is None and old_rule.update(log.q[k], log.qd[k]) is not None:
+            faulted_before = log.t[k] - log.t[0]
+    assert faulted_before is not None and faulted_before < 0.3
 
 
 def test_stale_periods_zero_turns_the_check_off(dyn):

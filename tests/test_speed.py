@@ -104,25 +104,33 @@ def test_range_check_agrees_with_numpy_comparisons():
 
 
 def test_frozen_encoder_count_equals_the_numpy_formula():
-    """Bit-identical repeats (−0.0 differs from 0.0) counted as the array formula does."""
+    """Bit-identical repeats (−0.0 differs from 0.0) counted as the array formula does.
+
+    A joint is frozen once its (q, q̇) repeated ``periods`` times with |q̇| above the
+    speed; the sample is stale once q, q̇ and τ of every joint repeated so (never without τ).
+    """
     rng = np.random.default_rng(6)
-    n, periods = 4, 5
-    encoders = FrozenEncoders(n, periods)
-    runs, previous = np.ones(n, dtype=int), None
+    n, periods, speed = 4, 5, 0.01
+    encoders = FrozenEncoders(n, periods, speed)
+    runs, whole, previous = np.ones(n, dtype=int), 1, None
     for k in range(3000):
         if previous is None or rng.random() < 0.3:
-            q, qd = rng.choice([0.0, -0.0, 1.0], n), rng.choice([0.0, -0.0, 2.0], n)
-        reason = encoders.update(q.copy(), qd.copy())
-        bits = np.concatenate((q, qd)).view(np.uint64)
+            q, qd = rng.choice([0.0, -0.0, 1.0], n), rng.choice([0.0, -0.0, 0.005, 2.0], n)
+            tau = None if rng.random() < 0.2 else rng.choice([0.0, -0.0, 3.0], n)
+        reason = encoders.update(q.copy(), qd.copy(), None if tau is None else tau.copy())
+        bits = np.concatenate((q, qd, np.zeros(n) if tau is None else tau)).view(np.uint64)
         if previous is not None:
-            same = bits == previous
-            runs = runs * (same[:n] & same[n:]) + 1
-        previous = bits
-        np.testing.assert_array_equal(encoders.frozen(), runs >= periods)
-        frozen = np.flatnonzero(runs >= periods)
-        assert (reason is None) == (frozen.size == 0), k
+            same = bits == previous[0]
+            runs = runs * (same[:n] & same[n : 2 * n]) + 1
+            whole = whole + 1 if tau is not None and previous[1] and same.all() else 1
+        previous = bits, tau is not None
+        frozen = np.flatnonzero((runs >= periods) & (np.abs(qd) > speed))
+        np.testing.assert_array_equal(encoders.frozen(), (runs >= periods) | (whole >= periods))
+        assert (reason is None) == (frozen.size == 0 and whole < periods), k
         if frozen.size:
             assert reason.startswith(f"joint {frozen[0] + 1} encoder frozen"), reason
+        elif reason is not None:
+            assert reason.startswith("sensor data stale"), reason
 
 
 def test_minimum_jerk_phase_of_one_time_equals_numpy_scalar_math():

@@ -1,8 +1,8 @@
-"""Checks of every sensor sample and command: shape, finite, in range, not frozen (SPEC §7).
+"""Checks of every sensor sample and command: shape, finite, in range, not stale (SPEC §7).
 
 Each check returns the one-line reason a reading is bad (joints numbered from 1 at the
 base), or None. A good sample costs one compiled pass over its readings, which also counts
-its encoders (:meth:`FrozenEncoders.count`); the reasons are only spelled out for a bad one.
+its repeats (:meth:`FrozenEncoders.count`); the reasons are only spelled out for a bad one.
 """
 
 from __future__ import annotations
@@ -110,26 +110,40 @@ _NO_BOUNDS = np.zeros(0)
 
 
 class FrozenEncoders:
-    """Counts bit-identical (q, q̇) samples per joint: a frozen encoder repeats itself.
+    """Counts bit-identical readings: a stale sensor repeats itself, an arm at rest may too.
+
+    A real arm at rest repeats its readings exactly: a UR10e standing still reports the
+    same (q, q̇) of a joint for up to 15 s and of every joint for up to 1.25 s (the logs in
+    ``realdata/ur10e``, 100 Hz), and a check of (q, q̇) alone faulted it after 0.25 s. So a
+    repeat is stale only where it cannot be a sample of an arm at rest:
+
+    - a joint whose q and q̇ repeat while q̇ says it moves (``|q̇| > speed``): an encoder
+      that stopped, or a packet repeated while the arm moves;
+    - the whole sample repeated, the measured torque of every joint included: the drives'
+      torque (current) readings are noisy, and no sample of those logs repeats its
+      predecessor even once. Without a torque measurement a repeated sample of an arm at
+      rest cannot be told from rest; it holds the arm where it is.
 
     Args:
         n: Number of joints.
-        periods: A joint is frozen after this many identical samples (0: never).
+        periods: Repeats that make a reading stale (0: never).
+        speed: A joint whose velocity reading exceeds this moves [rad/s].
     """
 
-    def __init__(self, n: int, periods: int) -> None:
+    def __init__(self, n: int, periods: int, speed: float = 0.01) -> None:
         self.n = n
         self.periods = periods
+        self.speed = speed
         self.clear()
 
     def clear(self) -> None:
         """Forget the samples seen so far (the counters restart)."""
         self._previous_bits: NDArray[np.uint64] | None = None
-        self._runs = np.zeros(self.n, dtype=np.int64)
+        self._runs = np.zeros(self.n + 1, dtype=np.int64)  # per joint, then the whole sample
 
-    def update(self, q: FloatArray, qd: FloatArray) -> str | None:
-        """Count one sample (q [rad], q̇ [rad/s], shape (n,)); a frozen encoder's reason, or None."""
-        return self.reason(self.count(q, qd))
+    def update(self, q: FloatArray, qd: FloatArray, tau: FloatArray | None = None) -> str | None:
+        """Count one sample (q [rad], q̇ [rad/s], τ [Nm] or None, shape (n,)): why stale, or None."""
+        return self.reason(self.count(q, qd, tau))
 
     def count(
         self,
@@ -149,45 +163,55 @@ class FrozenEncoders:
             high: Upper bounds, likewise.
 
         Returns:
-            :data:`OUT_OF_RANGE` (nothing counted), −1, or the first frozen joint.
+            :data:`OUT_OF_RANGE` (nothing counted), −1 (fresh), the first frozen joint, or
+            ``n``: the whole sample is stale.
         """
         first = self._previous_bits is None
         if first:
-            self._previous_bits = np.zeros(2 * self.n, dtype=np.uint64)
+            self._previous_bits = np.zeros(3 * self.n, dtype=np.uint64)
         shape = (self.n,)
         if q.shape != shape or qd.shape != shape or (tau is not None and tau.shape != shape):
             return OUT_OF_RANGE  # as in_range: a reading of another shape is not in range
         checked = 0 if low is None or high is None else (2 if tau is None else 3)
-        # a joint whose q and q̇ bits both repeat counts on, a changed one restarts at 1
         low = _NO_BOUNDS if low is None else low
         high = _NO_BOUNDS if high is None else high
-        return _count_repeats(q, qd, q if tau is None else tau, checked, low, high,  # type: ignore[no-any-return]
-                              self._previous_bits, self._runs, first, self.periods)  # fmt: skip
+        return _count_repeats(q, qd, q if tau is None else tau, tau is not None, checked,  # type: ignore[no-any-return]
+                              low, high, self._previous_bits, self._runs, first, self.periods,
+                              self.speed)  # fmt: skip
 
     def reason(self, count: int) -> str | None:
-        """The reason for a frozen joint of :meth:`count` (an index ≥ 0), else None."""
+        """Why the sample :meth:`count` returned ``count`` for is stale, else None."""
         if count < 0:
             return None
-        return (
-            f"joint {count + 1} encoder frozen: q and qd identical for {self._runs[count]} samples"
-        )
+        runs = self._runs[count]
+        if count == self.n:
+            return (
+                f"sensor data stale: q, qd and torque of every joint identical for {runs} samples"
+            )
+        return (f"joint {count + 1} encoder frozen: q and qd identical for {runs} samples, "
+                f"qd above {self.speed:g} rad/s")  # fmt: skip
 
     def frozen(self) -> NDArray[np.bool_]:
-        """Joints whose encoder is frozen: ``periods`` identical samples (0: none)."""
+        """Joints whose readings repeated ``periods`` times, or all if the sample is stale.
+
+        Their velocity readings are not trusted (a joint at rest loses nothing by that).
+        """
         if self.periods == 0:
             return np.zeros(self.n, dtype=bool)
-        return self._runs >= self.periods
+        repeated = self._runs >= self.periods
+        return repeated[: self.n] | repeated[self.n]
 
 
 @kernel
-def _count_repeats(q, qd, tau, checked, low, high, previous_bits, runs, first,
-                   periods):  # fmt: skip
-    """Count bit-identical (q, q̇) per joint in place; the first frozen joint, or −1.
+def _count_repeats(q, qd, tau, has_tau, checked, low, high, previous_bits, runs, first,
+                   periods, speed):  # fmt: skip
+    """Count bit-identical readings in place; the first frozen joint, ``n`` (stale), or −1.
 
     First, when ``checked`` > 0, the first ``checked`` of (q, q̇, τ) must lie within
     [low, high] (NaN does not, as in :func:`in_range`): else :data:`OUT_OF_RANGE`
-    and nothing is counted. ``previous_bits`` holds the bits of the last (q, q̇) and is
-    overwritten with these.
+    and nothing is counted. ``runs[i]`` counts joint i's repeated (q, q̇), ``runs[n]`` the
+    repeated whole sample (q, q̇ and τ of every joint; without τ it never repeats).
+    ``previous_bits`` holds the bits of the last (q, q̇, τ) and is overwritten with these.
     """
     n = q.shape[0]
     for k in range(checked):
@@ -195,15 +219,22 @@ def _count_repeats(q, qd, tau, checked, low, high, previous_bits, runs, first,
         for i in range(n):
             if not low[k * n + i] <= values[i] <= high[k * n + i]:
                 return OUT_OF_RANGE
-    q_bits, qd_bits = q.view(np.uint64), qd.view(np.uint64)
-    frozen = -1
+    q_bits, qd_bits, tau_bits = q.view(np.uint64), qd.view(np.uint64), tau.view(np.uint64)
+    stale = -1
+    whole = has_tau and not first
     for i in range(n):
         same = q_bits[i] == previous_bits[i] and qd_bits[i] == previous_bits[n + i]
+        whole = whole and same and tau_bits[i] == previous_bits[2 * n + i]
         runs[i] = 1 if first or not same else runs[i] + 1
         previous_bits[i], previous_bits[n + i] = q_bits[i], qd_bits[i]
-        if frozen < 0 and periods > 0 and runs[i] >= periods:
-            frozen = i
-    return frozen
+        if has_tau:  # (a ternary with 0 would pass the bits through a float in numba)
+            previous_bits[2 * n + i] = tau_bits[i]
+        if stale < 0 and periods > 0 and runs[i] >= periods and abs(qd[i]) > speed:
+            stale = i
+    runs[n] = runs[n] + 1 if whole else 1
+    if stale < 0 and periods > 0 and runs[n] >= periods:
+        stale = n
+    return stale
 
 
 def trusted_velocity(qd: object, bound: FloatArray, frozen: NDArray[np.bool_]) -> FloatArray:

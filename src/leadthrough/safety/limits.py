@@ -22,8 +22,13 @@ class SafetyParameters:
         soft_limit_margin: The walls start this far inside each hard position limit [rad].
         wall_torque_fraction: Wall torque at the hard limit, fraction of the torque limit.
         wall_damping_time: Wall damping is ``M_ii / wall_damping_time`` into the wall [s].
-        stale_periods: A joint whose q and q̇ are bit-identical for this many consecutive
-            samples has a frozen encoder (≥ 2; 0 turns the check off, for noiseless mocks).
+        stale_periods: Repeats that make a reading stale (≥ 2; 0 turns the check off, for
+            noiseless mocks): a joint whose q and q̇ are bit-identical for this many
+            consecutive samples while q̇ exceeds ``stale_speed`` has a frozen encoder, and
+            a whole sample so repeated, the measured torques included, is stale data. An
+            arm at rest repeats its (q, q̇) exactly (:class:`~.checks.FrozenEncoders`).
+        stale_speed: A joint whose velocity reading exceeds this moves [rad/s] (the
+            controller's ``rest_velocity``).
         torque_reading_margin: Measured torques beyond this × the torque limit are out of range.
         velocity_reading_margin: Velocities beyond this × the speed limit are out of range.
         position_reading_margin: Positions this far beyond the hard limits are out of range [rad].
@@ -37,6 +42,7 @@ class SafetyParameters:
     wall_torque_fraction: float = 0.5
     wall_damping_time: float = 0.05
     stale_periods: int = 25
+    stale_speed: float = 0.01
     torque_reading_margin: float = 1.5
     velocity_reading_margin: float = 2.0
     position_reading_margin: float = 0.1
@@ -51,7 +57,7 @@ class SafetyParameters:
                 raise ParameterError(name, f"must be in (0, 1], got {value:g}")
         for name in ("torque_reading_margin", "velocity_reading_margin"):
             real(name, getattr(self, name), minimum=1.0, error=ParameterError)
-        for name in ("position_reading_margin", "safe_stop_damping_time"):
+        for name in ("position_reading_margin", "safe_stop_damping_time", "stale_speed"):
             real(name, getattr(self, name), minimum=0.0, error=ParameterError)
         stale = self.stale_periods
         is_integer = isinstance(stale, int | np.integer) and not isinstance(stale, bool)

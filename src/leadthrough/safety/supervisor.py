@@ -96,7 +96,8 @@ class SafetySupervisor:
         self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
         self.parameters = parameters or SafetyParameters()
         self.use_model(dynamics)
-        self._encoders = FrozenEncoders(self.n, self.parameters.stale_periods)
+        self._encoders = FrozenEncoders(self.n, self.parameters.stale_periods,
+                                       self.parameters.stale_speed)  # fmt: skip
         self.state = SupervisorState.HOLDING
         self.fault_reason: str | None = None
         self._log_book = EventLog()
@@ -190,7 +191,7 @@ class SafetySupervisor:
                                              limits.sample_high)  # fmt: skip
             if count == OUT_OF_RANGE:  # spell out why (the NumPy reference, step by step)
                 problem = self._sample_problem(position, velocity, tau)
-                problem = problem or self._encoders.update(position, velocity)
+                problem = problem or self._encoders.update(position, velocity, tau)
             else:
                 problem = self._encoders.reason(count)
         except Exception as error:  # nothing may escape on the motor path
