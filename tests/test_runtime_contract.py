@@ -165,12 +165,21 @@ def test_one_delay_line_for_the_command_and_its_dither(monkeypatch, delay):
         ({"unwind_time": 0.0}, "unwind_time"),
         ({"assist_speed_fraction": 1.5}, "assist_speed_fraction"),
         ({"dither": DitherParameters(moving_velocity=0.02)}, "rest_velocity"),
+        ({"safety": SafetyParameters(stale_speed=0.02)}, "rest_velocity"),
     ],
 )
 def test_invalid_parameters_are_refused_at_construction(changes, message):
     """Integer delays from 1, one definition of at rest: one line naming the parameter."""
     with pytest.raises(ParameterError, match=message):
         LeadThroughParameters(**changes)
+
+
+def test_rest_velocity_is_the_dithers_and_the_supervisors():
+    """One definition of at rest: the dither and the stale-data check follow rest_velocity."""
+    parameters = LeadThroughParameters(rest_velocity=0.02)
+    assert parameters.dither.moving_velocity == parameters.safety.stale_speed == 0.02
+    controller = lt.LeadThrough(ROBOT, parameters=parameters)
+    assert controller.supervisor.parameters.stale_speed == 0.02
 
 
 def test_bounds_that_would_invert_are_refused_against_the_robot():

@@ -152,8 +152,10 @@ class LeadThroughParameters:
             integer ≥ 1 [–] (2 on the twin and the thesis' interface: applied one period
             late, measured over the period after).
         rest_velocity: A joint slower than this is at rest [rad/s]: the one definition
-            of "at rest" (the dither comes on after ``dither.rest_time`` at rest, and
-            the friction compensation's dead-band widens to it while dithering).
+            of "at rest" (the dither comes on after ``dither.rest_time`` at rest, the
+            friction compensation's dead-band widens to it while dithering, and the
+            supervisor takes a joint repeating its readings above it for a frozen encoder:
+            ``safety.stale_speed``).
     """
 
     mode: Mode = "active"
@@ -222,15 +224,24 @@ class LeadThroughParameters:
         self._check_rest_velocity()
 
     def _check_rest_velocity(self) -> None:
-        """The dither's ``moving_velocity`` is ``rest_velocity``: one definition of at rest."""
-        if self.dither is None or self.dither.moving_velocity == self.rest_velocity:
+        """``rest_velocity`` is the one definition of at rest: the dither's, the supervisor's.
+
+        ``dither.moving_velocity`` and ``safety.stale_speed`` follow it; either set to
+        another value than its default is refused.
+        """
+        self._follow_rest_velocity("dither", "moving_velocity", DitherParameters.moving_velocity)
+        self._follow_rest_velocity("safety", "stale_speed", SafetyParameters.stale_speed)
+
+    def _follow_rest_velocity(self, table: str, name: str, default: float) -> None:
+        """Set ``table.name`` to ``rest_velocity`` unless it was set to something else."""
+        settings = getattr(self, table)
+        if settings is None or getattr(settings, name) == self.rest_velocity:
             return
-        if self.dither.moving_velocity != DitherParameters.moving_velocity:
-            raise ParameterError("dither.moving_velocity", f"{self.dither.moving_velocity:g} "
-                                 f"differs from rest_velocity {self.rest_velocity:g}: set "
-                                 "rest_velocity only (one definition of at rest)")  # fmt: skip
-        dither = dataclasses.replace(self.dither, moving_velocity=self.rest_velocity)
-        object.__setattr__(self, "dither", dither)
+        if getattr(settings, name) != default:
+            raise ParameterError(f"{table}.{name}", f"{getattr(settings, name):g} differs from "
+                                 f"rest_velocity {self.rest_velocity:g}: set rest_velocity only "
+                                 "(one definition of at rest)")  # fmt: skip
+        object.__setattr__(self, table, dataclasses.replace(settings, **{name: self.rest_velocity}))
 
     @property
     def gravity_uncertainty(self) -> float:
