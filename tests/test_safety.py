@@ -153,6 +153,32 @@ def test_a_stale_sample_faults_after_exactly_stale_periods(dyn):
                                 "for 10 samples")  # fmt: skip
 
 
+def test_a_whole_sample_counts_only_with_torques_each_time(dyn):
+    """τ given, then none, then given again: the count restarts; without τ it never counts.
+
+    A sample without a torque measurement cannot be stale as a whole, so a repeated τ
+    around it is compared with nothing; reset() restarts the whole-sample count too.
+    """
+    sup = SafetySupervisor(dyn, DT, SafetyParameters(stale_periods=3))
+    tau, still = np.full(N, 0.1), np.zeros(N)
+    pattern = [tau, tau, None, tau, tau, None, None, None, None]
+    assert all(sup.check(k * DT, MID, still, t) for k, t in enumerate(pattern))
+    assert [sup.check(t, MID, still, tau) for t in (0.1, 0.2, 0.3)] == [True, True, False]
+    sup.reset()  # the whole-sample count restarts too
+    assert [sup.check(t, MID, still, tau) for t in (0.4, 0.5, 0.6)] == [True, True, False]
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_the_compiled_check_and_the_numpy_reference_agree_on_stale_samples(dyn, compiled,
+                                                                          monkeypatch):  # fmt: skip
+    """A whole sample repeated faults on the same sample through either path, torques read."""
+    monkeypatch.setattr(SafetySupervisor, "compiled", compiled)
+    sup = SafetySupervisor(dyn, DT, SafetyParameters(stale_periods=4))
+    tau = np.full(N, 0.2)
+    assert [sup.check(k * DT, MID, np.zeros(N), tau) for k in range(4)] == [True] * 3 + [False]
+    assert sup.fault_reason.startswith("sensor data stale")
+
+
 @needs_realdata
 @pytest.mark.parametrize("name", ["validation/ur-20_01_17-p1.csv",
                                   "jointwise/ur-20_01_22-joint_1.csv"])  # fmt: skip
@@ -360,6 +386,9 @@ def test_events_are_logged_once_per_episode(sup, dyn):
         ("stale_periods", 1),
         ("stale_periods", 2.5),
         ("stale_periods", True),
+        ("stale_speed", -0.01),
+        ("stale_speed", 0.0),
+        ("stale_speed", np.nan),
         ("torque_reading_margin", 0.9),
         ("velocity_reading_margin", 0.5),
         ("position_reading_margin", -0.01),

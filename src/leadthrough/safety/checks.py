@@ -113,7 +113,8 @@ class FrozenEncoders:
     """Counts bit-identical readings: a stale sensor repeats itself, an arm at rest may too.
 
     A real arm at rest repeats its readings exactly: a UR10e standing still reports the
-    same (q, q̇) of a joint for up to 15 s and of every joint for up to 1.25 s (the logs in
+    same bits of (q, q̇) of a joint for up to 7.3 s and of every joint for up to 0.23 s
+    (equal in value, its q̇ flipping between 0.0 and −0.0: 15 s and 1.25 s; the logs in
     ``realdata/ur10e``, 100 Hz), and a check of (q, q̇) alone faulted it after 0.25 s. So a
     repeat is stale only where it cannot be a sample of an arm at rest:
 
@@ -121,8 +122,13 @@ class FrozenEncoders:
       that stopped, or a packet repeated while the arm moves;
     - the whole sample repeated, the measured torque of every joint included: the drives'
       torque (current) readings are noisy, and no sample of those logs repeats its
-      predecessor even once. Without a torque measurement a repeated sample of an arm at
-      rest cannot be told from rest; it holds the arm where it is.
+      predecessor even once.
+
+    What it cannot see, as a reading of an arm at rest: an encoder that stops while its
+    joint rests, or a driver that repeats q and reports q̇ = 0, while the torques stay
+    live; and, without a torque measurement, a stale sample of an arm whose joints all
+    move slower than ``speed``. The controller then compensates gravity at the stale pose,
+    and the walls and the speed braking do not see the arm pushed away from it.
 
     Args:
         n: Number of joints.
@@ -133,7 +139,7 @@ class FrozenEncoders:
     def __init__(self, n: int, periods: int, speed: float = 0.01) -> None:
         self.n = n
         self.periods = periods
-        self.speed = speed
+        self.speed = float(speed)
         self.clear()
 
     def clear(self) -> None:
@@ -211,7 +217,8 @@ def _count_repeats(q, qd, tau, has_tau, checked, low, high, previous_bits, runs,
     [low, high] (NaN does not, as in :func:`in_range`): else :data:`OUT_OF_RANGE`
     and nothing is counted. ``runs[i]`` counts joint i's repeated (q, q̇), ``runs[n]`` the
     repeated whole sample (q, q̇ and τ of every joint; without τ it never repeats).
-    ``previous_bits`` holds the bits of the last (q, q̇, τ) and is overwritten with these.
+    ``previous_bits`` holds the bits of the last (q, q̇, τ) and is overwritten with these;
+    ``runs[n]`` is 0 after a sample without τ, so the next one's τ is compared with nothing.
     """
     n = q.shape[0]
     for k in range(checked):
@@ -221,7 +228,7 @@ def _count_repeats(q, qd, tau, has_tau, checked, low, high, previous_bits, runs,
                 return OUT_OF_RANGE
     q_bits, qd_bits, tau_bits = q.view(np.uint64), qd.view(np.uint64), tau.view(np.uint64)
     stale = -1
-    whole = has_tau and not first
+    whole = has_tau and not first and runs[n] > 0  # runs[n] = 0: the last had no τ
     for i in range(n):
         same = q_bits[i] == previous_bits[i] and qd_bits[i] == previous_bits[n + i]
         whole = whole and same and tau_bits[i] == previous_bits[2 * n + i]
@@ -231,7 +238,7 @@ def _count_repeats(q, qd, tau, has_tau, checked, low, high, previous_bits, runs,
             previous_bits[2 * n + i] = tau_bits[i]
         if stale < 0 and periods > 0 and runs[i] >= periods and abs(qd[i]) > speed:
             stale = i
-    runs[n] = runs[n] + 1 if whole else 1
+    runs[n] = runs[n] + 1 if whole else (1 if has_tau else 0)
     if stale < 0 and periods > 0 and runs[n] >= periods:
         stale = n
     return stale

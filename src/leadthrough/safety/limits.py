@@ -57,7 +57,8 @@ class SafetyParameters:
                 raise ParameterError(name, f"must be in (0, 1], got {value:g}")
         for name in ("torque_reading_margin", "velocity_reading_margin"):
             real(name, getattr(self, name), minimum=1.0, error=ParameterError)
-        for name in ("position_reading_margin", "safe_stop_damping_time", "stale_speed"):
+        real("stale_speed", self.stale_speed, minimum=0.0, strict=True, error=ParameterError)
+        for name in ("position_reading_margin", "safe_stop_damping_time"):
             real(name, getattr(self, name), minimum=0.0, error=ParameterError)
         stale = self.stale_periods
         is_integer = isinstance(stale, int | np.integer) and not isinstance(stale, bool)
