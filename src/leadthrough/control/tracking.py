@@ -1,4 +1,7 @@
-"""Joint-space tracking by computed torque (experiments, excitation and replay).
+"""Joint-space tracking by computed torque, and the bandwidth a tracking loop may have.
+
+The tracker serves the experiments, the excitation and the replay; the bandwidths of
+those loops and of the start-up calibration's follow the control period (below).
 
     τ = G(q) + M(q) (q̈_ref + ω² (q_ref − q) + 2ζω (q̇_ref − q̇))
 
