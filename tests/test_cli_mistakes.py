@@ -178,6 +178,8 @@ def test_bad_arguments_are_one_line_and_exit_2(workdir, argv):
         ["experiments", "--out", "afile"],
         ["replay", "taught.mcap", "--out", "afile"],
         ["teach", "--out", "taught.mcap"],
+        ["simulate", "--h"],  # an abbreviation: not --help (hypothesis found it exiting 0)
+        ["simulate", "--dur", "1"],
     ],
     ids=" ".join,
 )

@@ -20,7 +20,7 @@ import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
 
 from leadthrough.experiments.bounds import MAX_SECONDS, TIME_SCALE_RANGE
 from leadthrough.model.description import RobotDescription
@@ -30,7 +30,16 @@ MAX_SEED = 2**32 - 1
 
 
 class OneLineParser(argparse.ArgumentParser):
-    """An ArgumentParser whose errors are one line on stderr (exit status 2), no usage block."""
+    """An ArgumentParser whose errors are one line on stderr (exit status 2), no usage block.
+
+    Options are spelled out: an abbreviation is an unknown option (``--h`` is not
+    ``--help``, ``--dur`` not ``--duration``), so a typo on a robot's command line is an
+    error, never a guess. Subcommands' parsers are of this class too.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
         """Print ``<prog>: error: <message> (see --help)`` and exit with status 2."""
