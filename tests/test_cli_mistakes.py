@@ -115,6 +115,24 @@ TIME_SCALE = _value(lambda s: _is_float_in(s, 0.05, 20.0))
 NAME = st.text(st.characters(codec="utf-8", exclude_characters="\x00"), max_size=10)
 
 
+def _option_names() -> set[str]:
+    """Every option of every command, without its dashes (``help``, ``out``, ``force``, …)."""
+    import argparse
+
+    from leadthrough.cli.main import build_parser
+
+    parser, names = build_parser(), set()
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for command in action.choices.values():
+                names |= {o.lstrip("-") for a in command._actions for o in a.option_strings}
+    return names
+
+
+#: Options that exist: an "unknown" option must not be one of them.
+OPTIONS = _option_names()
+
+
 @st.composite
 def bad_arguments(draw) -> list[str]:
     """A command and one bad option (the others left at their defaults)."""
@@ -122,7 +140,8 @@ def bad_arguments(draw) -> list[str]:
     names = st.sampled_from(["missing.toml", "missing.urdf", "afile", "adir", "cut.mcap"])
     robot = ["--robot", draw(names | NAME.map(lambda s: f"no_such_{s}"))]
     out_dir = ["--out", draw(st.sampled_from(["afile", "afile/sub", "taught.mcap"]))]
-    unknown = ["--" + draw(NAME.filter(lambda s: s.strip() and not s.startswith("-")))]
+    unknown = ["--" + draw(NAME.filter(lambda s: s.strip() and not s.startswith("-")
+                                       and s not in OPTIONS))]  # fmt: skip
     seed = ["--seed", draw(SEED)]
     bad = {
         "info": [robot, unknown],
