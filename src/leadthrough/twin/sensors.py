@@ -123,7 +123,8 @@ class Sensors:
         reading of ``q_true`` differenced over ``dt`` and low-passed (first order), so it
         lags the truth by about ``dt / 2 + 1 / (2π f_c)``, plus the same white noise.
         (Without that noise a resting arm reports q and q̇ bit-identical period after
-        period, which the safety supervisor takes for a frozen encoder.)
+        period, as a real one may (the UR10e's logs do); the safety supervisor takes that
+        for rest, not for a frozen encoder (:class:`~leadthrough.safety.checks.FrozenEncoders`).)
         """
         noise = self.rng.normal(0.0, self.model.velocity_noise_std, self.n)
         cutoff = self.model.velocity_cutoff
