@@ -61,3 +61,38 @@ def test_inspect_the_link4_push_run(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "3 contact(s)" in printed
     assert "note: ur10e: drive data assumed" in printed
+
+
+def test_inspect_says_where_the_supervisor_would_fault(ur10e, tmp_path, capsys):
+    """A log whose samples repeat whole from 2 s on (a stalled driver): the fault and its time.
+
+    The same log without the stall passes every check, and the report says so.
+    """
+    from leadthrough.experiments.real_logs import supervisor_verdict
+
+    log = synthetic_log(ur10e, push=(2.0, 3.0, [0, 0, 25.0, 0, 0, 0]), current=True)
+    assert supervisor_verdict(log, ur10e) is None
+    stalled = [value.copy() for value in (log.q, log.qd, log.current)]
+    after = log.t - log.t[0] >= 2.0
+    for value in stalled:
+        value[after] = value[np.argmax(after)]  # the sample at 2 s, repeated from then on
+    frozen = lt.JointLog(log.t, stalled[0], stalled[1], current=stalled[2])
+    time, reason = supervisor_verdict(frozen, ur10e)
+    period = log.median_period
+    assert time == pytest.approx(2.0 + 24 * period, abs=1.5 * period)  # the 25th repeat
+    assert "frozen" in reason or "stale" in reason  # a moving joint's repeats, or the whole
+    write_ur_csv(frozen, tmp_path / "stalled.csv")
+    assert main(["inspect", str(tmp_path / "stalled.csv"), "--out", str(tmp_path / "out")]) == 0
+    assert "the supervisor would fault" in capsys.readouterr().out
+    assert "supervisor would fault" in (tmp_path / "out" / "report.md").read_text()
+
+
+@needs_realdata
+def test_a_real_ur10e_log_passes_every_check_of_the_supervisor(ur10e):
+    """A static hold of the real UR10e, its readings repeating exactly: no fault."""
+    from leadthrough.experiments.real_logs import supervisor_verdict
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        log = lt.read_log(REALDATA / "ur10e" / "validation" / "ur-20_01_17-p1.csv", ur10e)
+    assert supervisor_verdict(log, ur10e) is None

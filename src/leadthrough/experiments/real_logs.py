@@ -1,5 +1,9 @@
 """Inspect a recorded log: the observer at the log's rate, contacts, false-alarm table.
 
+And the safety supervisor's sample checks over the log as recorded (:func:`supervisor_verdict`):
+a driver whose samples the supervisor would refuse (stale, out of range, non-finite) is
+found on a log, before the arm is guided.
+
 Used by ``leadthrough inspect`` and by ``benchmarks/real_observer.py``: the observer runs
 over the log with the robot model given (nominal or identified) and its model
 uncertainty, the online contact detector runs on the result, and a report (Markdown
@@ -17,12 +21,15 @@ from leadthrough.estimation.log_observer import (
     ModelUncertainty,
     ObservedLog,
     false_alarm_table,
+    measured_torque,
     observe_log,
     run_detector,
 )
 from leadthrough.friction.model import FrictionModel
 from leadthrough.logs.log import JointLog
 from leadthrough.model.description import FloatArray, RobotDescription
+from leadthrough.model.dynamics import Dynamics
+from leadthrough.safety.supervisor import SafetySupervisor
 
 
 @dataclass(frozen=True, eq=False)
@@ -34,12 +41,30 @@ class Inspection:
         events: Detected contacts (log time base).
         table: The false-alarm table of the whole log (:func:`false_alarm_table`).
         robot: Name of the model used.
+        fault: Where the supervisor would fault over the log as recorded: (time from its
+            start [s], the reason), or None (:func:`supervisor_verdict`).
     """
 
     observed: ObservedLog
     events: list[ContactEvent]
     table: dict[str, FloatArray]
     robot: str
+    fault: tuple[float, str] | None = None
+
+
+def supervisor_verdict(log: JointLog, robot: RobotDescription) -> tuple[float, str] | None:
+    """The safety supervisor's checks of every sample of ``log``, at its median period.
+
+    Returns:
+        (time from the log's start [s], the one-line reason) of the first sample it
+        would fault on (a reading out of range, non-finite, or stale), or None.
+    """
+    torque = measured_torque(log, robot)
+    supervisor = SafetySupervisor(Dynamics(robot), log.median_period)
+    for k in range(log.n_samples):
+        if not supervisor.check(float(log.t[k]), log.q[k], log.qd[k], torque[k]):
+            return float(log.t[k] - log.t[0]), str(supervisor.fault_reason)
+    return None
 
 
 def inspect_log(
@@ -52,7 +77,8 @@ def inspect_log(
     """The observer over ``log`` at its own rate, the contacts and the false-alarm table."""
     observed = observe_log(log, robot, friction, uncertainty)
     events = run_detector(observed, parameters)
-    return Inspection(observed, events, false_alarm_table([observed]), robot.name)
+    return Inspection(observed, events, false_alarm_table([observed]), robot.name,
+                      supervisor_verdict(log, robot))  # fmt: skip
 
 
 def false_alarm_markdown(table: dict[str, FloatArray], label: str = "") -> str:
@@ -65,6 +91,14 @@ def false_alarm_markdown(table: dict[str, FloatArray], label: str = "") -> str:
                      f"{table['median_std'][j]:.2f} | {100 * table['exceed'][j]:.1f} | "
                      f"{table['z_rms'][j]:.2f} |{f' {label} |' if label else ''}")  # fmt: skip
     return "\n".join(lines)
+
+
+def supervisor_markdown(fault: tuple[float, str] | None) -> str:
+    """One line: every sample passes the supervisor's checks, or where it would fault."""
+    if fault is None:
+        return ("Every sample of the log, as recorded, passes the supervisor's checks: none is "
+                "out of range, non-finite or stale.")  # fmt: skip
+    return f"The supervisor would fault {fault[0]:.2f} s into the log: {fault[1]}."
 
 
 def events_markdown(events: Sequence[ContactEvent], t0: float) -> str:
@@ -96,6 +130,10 @@ def write_inspection(inspection: Inspection, source: str, out: Path) -> Path:
         f"Model: {inspection.robot}. {observed.t.size} samples over "
         f"{observed.t[-1] - observed.t[0]:.1f} s, observer at {1 / observed.dt:.0f} Hz (the "
         "log's median period). The std is the observer's and the model uncertainty combined.",
+        "",
+        "## Safety supervisor",
+        "",
+        supervisor_markdown(inspection.fault),
         "",
         "## Contacts",
         "",
