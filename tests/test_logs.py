@@ -5,6 +5,7 @@ import pytest
 
 import leadthrough as lt
 from leadthrough.errors import InputShapeError
+from leadthrough.experiments.real_logs import supervisor_verdict
 from leadthrough.runtime.readers import LogError, LogWarning, detect_format
 from realdata import REALDATA, needs_realdata
 
@@ -116,6 +117,8 @@ def test_every_real_ur10e_log_reads_and_the_corrupted_one_says_so():
         log = lt.read_log(path, robot)
         assert log.tau is not None and np.all(np.diff(log.t) > 0), path.name
         assert 0.008 < log.median_period < 0.013, path.name
+        # the arm at rest repeats its readings exactly: still no stale sample for the supervisor
+        assert supervisor_verdict(log, robot) is None, path.name
 
 
 @needs_realdata
