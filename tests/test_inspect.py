@@ -83,7 +83,7 @@ def test_inspect_says_where_the_supervisor_would_fault(ur10e, tmp_path, capsys):
     assert "frozen" in reason or "stale" in reason  # a moving joint's repeats, or the whole
     write_ur_csv(frozen, tmp_path / "stalled.csv")
     assert main(["inspect", str(tmp_path / "stalled.csv"), "--out", str(tmp_path / "out")]) == 0
-    assert "the supervisor would fault" in capsys.readouterr().out
+    assert "supervisor would fault 2." in capsys.readouterr().out
     assert "supervisor would fault" in (tmp_path / "out" / "report.md").read_text()
 
 

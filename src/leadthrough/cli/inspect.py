@@ -53,8 +53,7 @@ def inspect(args: argparse.Namespace) -> int:
     observed = inspection.observed
     print(f"{args.log}: {observed.t[-1] - observed.t[0]:.1f} s at {1 / observed.dt:.0f} Hz, "
           f"{len(inspection.events)} contact(s)")  # fmt: skip
-    if inspection.fault is not None:
-        print(f"  the supervisor would fault {inspection.fault[0]:.2f} s in: {inspection.fault[1]}")
+    print(f"  {real_logs.supervisor_markdown(inspection.fault)}")  # the report's words
     for event in inspection.events:
         joints = ",".join(str(j + 1) for j in event.joints)
         print(f"  {event.start - observed.t[0]:7.2f} … {event.end - observed.t[0]:7.2f} s  "
