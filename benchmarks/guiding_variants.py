@@ -221,6 +221,21 @@ half_friction_margin = _scaled_margin(0.5)
 three_quarter_friction_margin = _scaled_margin(0.75)
 
 
+class _RelievedMarginLaw(ActiveLaw):
+    """The friction margin relieved where the reading exceeds it (``margin_relief``)."""
+
+    margin_relief = True
+
+
+class _RelievedMargin(lt.LeadThrough):
+    law_class = _RelievedMarginLaw
+
+
+def relieved_friction_margin(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """The friction margin kept whole up to its size, relieved beyond it (design log)."""
+    return _build(robot, mode, cls=_RelievedMargin)
+
+
 class _TrueTorqueLaw(ActiveLaw):
     """The law fed the simulated operator torque instead of the estimate (an oracle)."""
 

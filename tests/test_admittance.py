@@ -13,6 +13,7 @@ from leadthrough.control.admittance import (
     motion_sign,
     operator_weight,
     reanchored,
+    relieved_margin,
     settled_reference,
     unwound,
     virtual_damping,
@@ -50,6 +51,27 @@ def test_dead_zone_removes_the_width_and_an_offset_only_widens_it():
     np.testing.assert_allclose(dead_zone(x, 1.0), [-2.0, 0.0, 0.0, 0.0, 2.0])
     np.testing.assert_allclose(dead_zone(x, 1.0, 1.5), [-2.0, 0.0, 0.0, 0.0, 0.5])
     assert np.all(dead_zone(np.zeros(3), 0.1, np.array([-5.0, 0.0, 5.0])) == 0.0)
+
+
+def test_relieved_margin_keeps_a_reading_up_to_the_margin_drag_and_passes_a_large_push():
+    """The relieved friction margin, along the motion, both signs of motion alike.
+
+    A reading ≤ the margin keeps the whole margin (it reads as drag, so a released arm
+    still stops on friction overstated by up to the margin); above it the kept part is
+    margin² / a, continuous at a = margin, → 0 for a large push; a reading against the
+    motion keeps the whole margin (more drag).
+    """
+    margin = np.array([0.2, 0.2, 0.2, 0.2, 0.2, -0.2, 0.0])
+    reading = np.array([-0.5, 0.1, 0.2, 0.4, 20.0, -0.4, 0.3])
+    kept = relieved_margin(reading, margin)
+    np.testing.assert_allclose(kept, [0.2, 0.2, 0.2, 0.1, 0.002, -0.1, 0.0])
+    residual = reading - kept
+    assert np.all(residual[:3] <= 0.0)  # no reading up to the margin becomes a push
+    assert residual[4] == pytest.approx(20.0 - 0.002)
+    just_above = relieved_margin(np.array([0.2 + 1e-9]), np.array([0.2]))
+    assert just_above[0] == pytest.approx(0.2, abs=1e-8)  # no step at the margin
+    a = np.linspace(0.0, 2.0, 2001)  # the drive never falls as the reading grows
+    assert np.all(np.diff(a - relieved_margin(a, np.full_like(a, 0.2))) >= 0.0)
 
 
 def test_references_stop_at_the_bounds():

@@ -76,6 +76,21 @@ def _law_run(robot: lt.RobotDescription, parameters: LeadThroughParameters, fric
     return np.array(rows)
 
 
+def test_compiled_law_relieves_the_margin_as_the_numpy_reference(monkeypatch):
+    """The experiment ``ActiveLaw.margin_relief`` (design log), compiled and in NumPy.
+
+    Equal over the same random periods, and not the default law (the relief acts).
+    """
+    robot = lt.robots.yumi()
+    friction, parameters = lt.FrictionModel.from_robot(robot), LeadThroughParameters()
+    default = _law_run(robot, parameters, friction, compiled=True, errors=True)
+    monkeypatch.setattr(ActiveLaw, "margin_relief", True)
+    compiled = _law_run(robot, parameters, friction, compiled=True, errors=True)
+    reference = _law_run(robot, parameters, friction, compiled=False, errors=True)
+    np.testing.assert_allclose(compiled, reference, rtol=1e-9, atol=1e-9)
+    assert np.max(np.abs(compiled - default)) > 1e-3
+
+
 @pytest.mark.parametrize(
     "robot_name, changes, cable, errors",
     [

@@ -37,6 +37,7 @@ from leadthrough.control.admittance import (
     motion_sign,
     operator_weight,
     reanchored,
+    relieved_margin,
     settled_reference,
     signed_push_weight,
     tracking_torque,
@@ -106,6 +107,11 @@ class ActiveLaw:
     #: no share may be left to it: with ¾, just beyond the plant family, released arms ran
     #: on (README). Experiments set less on a subclass.
     margin_share = 1.0
+    #: Relieve the friction margin where the reading along the motion exceeds it
+    #: (:func:`~leadthrough.control.admittance.relieved_margin`): lighter on the plant
+    #: family, but a released arm whose friction the model overstates by more than the
+    #: margin runs on much farther (design log). An experiment: off.
+    margin_relief = False
 
     def __init__(
         self,
@@ -125,7 +131,8 @@ class ActiveLaw:
         # a lagging joint's velocity reference's, unwind_time (None: never)
         self._unwind_rate = 0.0 if p.unwind_time is None else dt / (p.unwind_time + dt)
         self._drive_scalars = np.array([p.gravity_uncertainty, dt, p.bias_time,
-                                        p.drive_gain_uncertainty, p.assist_knee])  # fmt: skip
+                                        p.drive_gain_uncertainty, p.assist_knee,
+                                        float(self.margin_relief)])  # fmt: skip
         self._admittance_scalars = np.array([float(p.limit_aware), p.reanchor_error,
             p.damping_time, p.rest_damping, p.inertia_scale, dt,
             (2.0 * np.pi * p.position_bandwidth) ** 2, p.velocity_time, p.assist_knee,
@@ -300,8 +307,11 @@ class ActiveLaw:
         clear_of_limits = bool(np.all((q > self._reference_low) & (q < self._reference_high)))
         unguided = (1.0 - float(np.max(self.weight))) ** 2 if clear_of_limits else 0.0
         self.model_error.update(estimate, gravity, self.dt, 2.0 * plausible, unguided)
-        residual = dead_zone(estimate, 0.0, self.model_error.bias) - self._friction_margin(q, qd)
-        residual = residual - p.drive_gain_uncertainty * self.feedback
+        residual = dead_zone(estimate, 0.0, self.model_error.bias)
+        margin = self._friction_margin(q, qd)
+        if self.margin_relief:
+            margin = relieved_margin(residual, margin)
+        residual = residual - margin - p.drive_gain_uncertainty * self.feedback
         uncertainty = (self._rest_tolerance + self.model_error.tolerance(gravity)
                        + self._coulomb_uncertainty(q, qd))  # fmt: skip
         self.weight = operator_weight(residual, uncertainty, p.assist_knee)

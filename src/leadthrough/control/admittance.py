@@ -91,6 +91,30 @@ def dead_zone(
     return np.where(value > upper, value - upper, np.where(value < lower, value - lower, 0.0))
 
 
+def relieved_margin(residual: FloatArray, margin: FloatArray) -> FloatArray:
+    """The friction margin, kept whole up to its size and relieved beyond it [Nm].
+
+    ``margin · min(1, |margin| / a)`` with ``a = residual · sign(margin)`` the reading
+    along the motion (the margin's sign): a reading no larger than the margin loses all of
+    it, so friction the model overstates by up to the margin still reads as drag (a
+    released arm stops); a larger reading loses ``margin² / a``, continuously, and a push
+    far above the margin passes almost whole (``a − margin² / a``, the shape of
+    :func:`operator_weight`'s). The slope of ``a − kept`` is 2 just above the margin.
+    Relief is only as safe as the margin is a bound: friction overstated by more than
+    the margin reads as a larger push than with the whole margin removed (design log,
+    *A friction margin relieved above its size*). An experiment, off by default
+    (``ActiveLaw.margin_relief``).
+
+    Args:
+        residual: The estimate with the learned bias removed [Nm].
+        margin: The friction margin, signed along the motion [Nm].
+    """
+    size = np.abs(margin)
+    along = np.where(margin > 0.0, residual, -residual)
+    relieved = np.where(along > size, size / np.where(along > size, along, 1.0), 1.0)
+    return margin * relieved
+
+
 def operator_weight(residual: FloatArray, uncertainty: FloatArray, knee: float) -> FloatArray:
     """How much of each joint's residual torque is the operator's, smoothly, in [0, 1).
 

@@ -43,7 +43,7 @@ JOINT_ROWS = ("friction_tolerance", "reference_low", "reference_high", "margin_e
               "rest_tolerance", "speed_cap", "viscous_margin_error")  # fmt: skip
 #: Scalars of :func:`operator_drive`, in order.
 DRIVE_SCALARS = ("gravity_uncertainty", "dt", "bias_time", "drive_gain_uncertainty",
-                 "assist_knee")  # fmt: skip
+                 "assist_knee", "margin_relief")  # fmt: skip
 #: Scalars of :func:`admittance_law`, in order (``limit_aware`` as 0/1, ``position_gain``
 #: is (2π f)² [1/s²]).
 ADMITTANCE_SCALARS = ("limit_aware", "reanchor_error", "damping_time", "rest_damping",
@@ -80,7 +80,7 @@ def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, sc
         residuals: The residual before its weight [Nm], written.
         uncertainty: What the model may read without an operator [Nm], written.
     """
-    gravity_uncertainty, dt, bias_time, gain_uncertainty, knee = scalars
+    gravity_uncertainty, dt, bias_time, gain_uncertainty, knee, relief = scalars
     n = q.shape[0]
     clear_of_limits, top, undefined = True, -math.inf, False
     for i in range(n):
@@ -112,6 +112,11 @@ def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, sc
         half_level = 0.5 * level[i]
         coulomb = (half_level * (upper[i] + lower[i]) + viscous[i]) - viscous[i]
         margin = joint[3, i] * coulomb + joint[6, i] * viscous[i]
+        if relief != 0.0:  # admittance.relieved_margin
+            size = abs(margin)
+            along = residual if margin > 0.0 else -residual
+            if along > size:
+                margin = margin * (size / along)
         residual = (residual - margin) - gain_uncertainty * feedback[i]
         unknown = abs(gravity[i])
         changed = abs(gravity[i] - gravity_learned[i])
