@@ -196,14 +196,18 @@ def tool_wrench_prior(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
     return _build(robot, mode, cls=_ToolWrenchPrior)
 
 
-def _scaled_margin(scale: float) -> Callable[[lt.RobotDescription, str], lt.LeadThrough]:
+def _scaled_margin(
+    scale: float, relief: bool = False
+) -> Callable[[lt.RobotDescription, str], lt.LeadThrough]:
     """A factory whose law removes ``scale`` times the level's whole error (the default's).
 
-    It sets ``ActiveLaw.margin_share``, which the compiled law reads too.
+    It sets ``ActiveLaw.margin_share`` (and ``margin_relief``: the margin relieved where the
+    reading exceeds it), which the compiled law reads too.
     """
 
     class _ScaledMarginLaw(ActiveLaw):
         margin_share = scale
+        margin_relief = relief
 
     class _ScaledMargin(lt.LeadThrough):
         law_class = _ScaledMarginLaw
@@ -211,7 +215,8 @@ def _scaled_margin(scale: float) -> Callable[[lt.RobotDescription, str], lt.Lead
     def factory(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
         return _build(robot, mode, cls=_ScaledMargin)
 
-    factory.__doc__ = f"The friction margin at {scale:g} of the level's whole error."
+    relieved = ", relieved above its size" if relief else ""
+    factory.__doc__ = f"The friction margin at {scale:g} of the level's whole error{relieved}."
     return factory
 
 
@@ -219,21 +224,11 @@ def _scaled_margin(scale: float) -> Callable[[lt.RobotDescription, str], lt.Lead
 no_friction_margin = _scaled_margin(0.0)
 half_friction_margin = _scaled_margin(0.5)
 three_quarter_friction_margin = _scaled_margin(0.75)
-
-
-class _RelievedMarginLaw(ActiveLaw):
-    """The friction margin relieved where the reading exceeds it (``margin_relief``)."""
-
-    margin_relief = True
-
-
-class _RelievedMargin(lt.LeadThrough):
-    law_class = _RelievedMarginLaw
-
-
-def relieved_friction_margin(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
-    """The friction margin kept whole up to its size, relieved beyond it (design log)."""
-    return _build(robot, mode, cls=_RelievedMargin)
+#: The margin relieved above its size (design log): lighter, but only as safe as it bounds
+#: the error; and wider, relieved: as light as the default, safer beyond the family.
+relieved_friction_margin = _scaled_margin(1.0, relief=True)
+relieved_wider_margin = _scaled_margin(1.3, relief=True)
+relieved_widest_margin = _scaled_margin(1.6, relief=True)
 
 
 class _TrueTorqueLaw(ActiveLaw):

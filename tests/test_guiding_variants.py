@@ -20,7 +20,7 @@ FACTORIES = ("no_unwinding", "no_weighting", "full_residual", "long_stroke", "lo
              "three_quarter_friction_margin", "joint_estimates",
              "plain_admittance", "own_rest_uncertainty", "no_credit_at_rest",
              "no_credit_at_rest_uncalibrated", "no_drive_gain_margin",
-             "relieved_friction_margin")  # fmt: skip
+             "relieved_friction_margin", "relieved_wider_margin")  # fmt: skip
 
 
 @pytest.fixture(scope="module")
