@@ -225,8 +225,9 @@ no_friction_margin = _scaled_margin(0.0)
 half_friction_margin = _scaled_margin(0.5)
 three_quarter_friction_margin = _scaled_margin(0.75)
 #: The margin relieved above its size (design log): lighter, but only as safe as it bounds
-#: the error; wider and relieved: as light as the default, every release of the ±25 %
-#: plants stopped, but farther run-ons with drive gains ±30 % and more vibration.
+#: the error. 1.3 margins relieved: as light as the default, every release of the ±25 %
+#: plants stopped, but farther run-ons with drive gains ±30 % and more vibration; 1.6:
+#: heavier than the default (0.87).
 relieved_friction_margin = _scaled_margin(1.0, relief=True)
 relieved_wider_margin = _scaled_margin(1.3, relief=True)
 relieved_widest_margin = _scaled_margin(1.6, relief=True)

@@ -61,12 +61,13 @@ def test_relieved_margin_keeps_a_reading_up_to_the_margin_drag_and_passes_a_larg
     margin² / a, continuous at a = margin, → 0 for a large push; a reading against the
     motion keeps the whole margin (more drag).
     """
-    margin = np.array([0.2, 0.2, 0.2, 0.2, 0.2, -0.2, 0.0])
-    reading = np.array([-0.5, 0.1, 0.2, 0.4, 20.0, -0.4, 0.3])
+    margin = np.array([0.2, 0.2, 0.2, 0.2, 0.2, -0.2, -0.2, -0.2, 0.0])
+    reading = np.array([-0.5, 0.1, 0.2, 0.4, 20.0, -0.4, 0.5, -0.1, 0.3])
     kept = relieved_margin(reading, margin)
-    np.testing.assert_allclose(kept, [0.2, 0.2, 0.2, 0.1, 0.002, -0.1, 0.0])
+    np.testing.assert_allclose(kept, [0.2, 0.2, 0.2, 0.1, 0.002, -0.1, -0.2, -0.2, 0.0])
     residual = reading - kept
     assert np.all(residual[:3] <= 0.0)  # no reading up to the margin becomes a push
+    assert np.all(residual[6:8] >= 0.0)  # nor with the motion the other way
     assert residual[4] == pytest.approx(20.0 - 0.002)
     just_above = relieved_margin(np.array([0.2 + 1e-9]), np.array([0.2]))
     assert just_above[0] == pytest.approx(0.2, abs=1e-8)  # no step at the margin

@@ -83,6 +83,7 @@ def test_compiled_law_relieves_the_margin_as_the_numpy_reference(monkeypatch):
     """
     robot = lt.robots.yumi()
     friction, parameters = lt.FrictionModel.from_robot(robot), LeadThroughParameters()
+    assert ActiveLaw.margin_relief is False  # the default law keeps its whole margin
     default = _law_run(robot, parameters, friction, compiled=True, errors=True)
     monkeypatch.setattr(ActiveLaw, "margin_relief", True)
     compiled = _law_run(robot, parameters, friction, compiled=True, errors=True)

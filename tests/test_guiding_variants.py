@@ -20,7 +20,8 @@ FACTORIES = ("no_unwinding", "no_weighting", "full_residual", "long_stroke", "lo
              "three_quarter_friction_margin", "joint_estimates",
              "plain_admittance", "own_rest_uncertainty", "no_credit_at_rest",
              "no_credit_at_rest_uncalibrated", "no_drive_gain_margin",
-             "relieved_friction_margin", "relieved_wider_margin")  # fmt: skip
+             "relieved_friction_margin", "relieved_wider_margin",
+             "relieved_widest_margin")  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -95,6 +96,19 @@ def test_scaled_margin_is_that_share_of_the_default(robot, name, scale):
     expected = (1.0 - scale) * law._friction_margin(q, sliding)
     compiled = _residual(variant, q, qd) - _residual(law, q, qd)  # the margins' difference
     np.testing.assert_allclose(compiled, expected, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "name, scale",
+    [("relieved_friction_margin", 1.0), ("relieved_wider_margin", 1.3),
+     ("relieved_widest_margin", 1.6)],
+)  # fmt: skip
+def test_relieved_margins_relieve_that_share_of_the_default(robot, name, scale):
+    """The relieved variants set the relief (compiled law too) and their margin's share."""
+    law = getattr(guiding_variants, name)(robot, "active").law
+    assert law.margin_relief and law._drive_scalars[-1] == 1.0
+    assert law.margin_share == scale
+    assert lt.LeadThrough(robot, mode="active").law._drive_scalars[-1] == 0.0
 
 
 def test_without_the_drive_gain_term_the_tracking_torque_reads_as_nothing(robot):

@@ -110,7 +110,8 @@ class ActiveLaw:
     #: Relieve the friction margin where the reading along the motion exceeds it
     #: (:func:`~leadthrough.control.admittance.relieved_margin`): lighter on the plant
     #: family, but a released arm whose friction the model overstates by more than the
-    #: margin runs on much farther (design log). An experiment: off.
+    #: margin runs on much farther (design log). An experiment: off; set it on a subclass
+    #: (the compiled law reads it when the law is built).
     margin_relief = False
 
     def __init__(

@@ -94,11 +94,12 @@ def dead_zone(
 def relieved_margin(residual: FloatArray, margin: FloatArray) -> FloatArray:
     """The friction margin, kept whole up to its size and relieved beyond it [Nm].
 
-    ``margin · min(1, |margin| / a)`` with ``a = residual · sign(margin)`` the reading
-    along the motion (the margin's sign): a reading no larger than the margin loses all of
-    it, so friction the model overstates by up to the margin still reads as drag (a
-    released arm stops); a larger reading loses ``margin² / a``, continuously, and a push
-    far above the margin passes almost whole (``a − margin² / a``, the shape of
+    ``margin · |margin| / a`` where ``a > |margin|``, else the whole margin, with ``a =
+    residual · sign(margin)`` the reading along the motion (the margin's sign): a reading
+    no larger than the margin, or against the motion, loses all of it, so friction the
+    model overstates by up to the margin still reads as drag (a released arm stops); a
+    larger reading loses ``margin² / a`` in size, continuously, and a push far above the
+    margin passes almost whole (``a − margin² / a``, the shape of
     :func:`operator_weight`'s). The slope of ``a − kept`` is 2 just above the margin.
     Relief is only as safe as the margin is a bound: friction overstated by more than
     the margin reads as a larger push than with the whole margin removed (design log,
