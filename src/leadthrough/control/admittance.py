@@ -112,8 +112,8 @@ def relieved_margin(residual: FloatArray, margin: FloatArray) -> FloatArray:
     """
     size = np.abs(margin)
     along = np.where(margin > 0.0, residual, -residual)
-    relieved = np.where(along > size, size / np.where(along > size, along, 1.0), 1.0)
-    return margin * relieved
+    above = along > size
+    return margin * np.where(above, size / np.where(above, along, 1.0), 1.0)
 
 
 def operator_weight(residual: FloatArray, uncertainty: FloatArray, knee: float) -> FloatArray:
