@@ -14,7 +14,11 @@ from leadthrough.friction.compensation import CoulombCompensationParameters
 #: Before: 5 mrad at 0.05 rad/s, inside the plants' Stribeck range, a level refused
 #: outside 1 / 1.75–1.75× the model's, and a level read known to ``friction_accuracy``
 #: everywhere, its pose included.
-SLOW = {"stroke": 0.005, "speed": 0.05, "max_friction_change": 0.75, "level_slope": None}
+SLOW = {"stroke": 0.005, "speed": 0.05, "max_friction_change": 0.75, "level_slope": None,
+        "bandwidth": 6.0}  # fmt: skip
+#: Before: a 6 Hz loop and a 10 mrad stroke at 250 Hz, a loop that grows with two periods
+#: of delay (``CalibrationParameters.bandwidth``).
+SIX_HERTZ = {"stroke": 0.01, "bandwidth": 6.0}
 
 
 def slow_calibration_motion(monkeypatch) -> None:
@@ -23,19 +27,25 @@ def slow_calibration_motion(monkeypatch) -> None:
     The default calibration of ``LeadThroughParameters`` included, so a case runs through
     the public API exactly as it did when it was found.
     """
-    _built_as(monkeypatch, CalibrationParameters(**SLOW))
+    built_as(monkeypatch, CalibrationParameters(**SLOW))
+
+
+def six_hertz_calibration(monkeypatch) -> None:
+    """Every ``CalibrationParameters()`` built in the test tracks as before (:data:`SIX_HERTZ`)."""
+    built_as(monkeypatch, CalibrationParameters(**SIX_HERTZ))
 
 
 def constant_level_error(monkeypatch) -> None:
     """Every calibration leaves a level it read its ``friction_accuracy`` at every pose.
 
     As before ``CalibrationParameters.level_slope``: the error did not grow from the
-    readings' scatter at the pose with the travel from it.
+    readings' scatter at the pose with the travel from it (and the loop moved as it then
+    did, :data:`SIX_HERTZ`).
     """
-    _built_as(monkeypatch, CalibrationParameters(level_slope=None))
+    built_as(monkeypatch, CalibrationParameters(level_slope=None, **SIX_HERTZ))
 
 
-def _built_as(monkeypatch, before) -> None:
+def built_as(monkeypatch, before) -> None:
     """Every instance of ``before``'s dataclass built during the test defaults to its fields."""
     defaults = tuple(getattr(before, item.name) for item in dataclasses.fields(before))
     monkeypatch.setattr(type(before).__init__, "__defaults__", defaults)
@@ -60,7 +70,7 @@ def two_second_park(monkeypatch) -> None:
     Parked on the creep itself (``creep``), the dither ends the creeps some of these
     cases showed.
     """
-    _built_as(monkeypatch, DitherParameters(park_time=2.0, creep=None))
+    built_as(monkeypatch, DitherParameters(park_time=2.0, creep=None))
 
 
 def unread_torque_offset(monkeypatch) -> None:
@@ -81,7 +91,7 @@ def thesis_compensation(monkeypatch) -> None:
     compensation's ramp keeps its compensation: the coasts and runs some of these cases
     showed then go on longer, for a reason of its own.
     """
-    _built_as(monkeypatch, CoulombCompensationParameters(follow_push="never"))
+    built_as(monkeypatch, CoulombCompensationParameters(follow_push="never"))
 
 
 def observer_readings(monkeypatch) -> None:

@@ -1,21 +1,24 @@
 """Start-up calibration: payload, Coulomb levels and gravity bias, measured on the twin."""
 
 import dataclasses
+import re
 
 import numpy as np
 import pytest
 
 import leadthrough as lt
-from as_found import slow_calibration_motion
+from as_found import SIX_HERTZ, built_as, slow_calibration_motion
 from leadthrough.control import calibration
 from leadthrough.control.calibration import (
     Calibration,
     CalibrationParameters,
     CalibrationRun,
+    calibration_gains,
     implausible_friction,
 )
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.control.parameters import LeadThroughParameters
+from leadthrough.control.tracking import loop_damping
 from leadthrough.estimation.momentum_balance import MomentumBalance, stretch_readings
 from leadthrough.friction.model import FrictionModel
 from leadthrough.safety.supervisor import SupervisorState
@@ -100,15 +103,18 @@ def test_the_payload_allowed_scales_with_the_arm(yumi):
     assert "kg allowed: was the arm touched?" in controller.calibration.reason
 
 
-def test_friction_far_above_the_model_is_measured_not_refused(yumi):
+def test_friction_far_above_the_model_is_measured_not_refused(yumi, monkeypatch):
     """A sampled plant whose joint 3 reads 1.6× the model (level, position, drive gain).
 
     Measured and accepted: refused (as with a ±50 % band), the arm was guided
-    uncalibrated, and released on the guiding benchmark it ran away 112 mrad.
+    uncalibrated, and released on the guiding benchmark it ran away 112 mrad. With the 6
+    Hz loop it was found with: under the 4 Hz one the joint sticks too often to count as
+    measured and keeps the model's level, which understates it (heavier, never unsafe).
     """
+    built_as(monkeypatch, CalibrationParameters(**SIX_HERTZ))
     plant = sample_plant(yumi, 11, "dry")
     controller = LeadThrough(yumi, calibrate=True)
-    simulate(DigitalTwin(yumi, plant.config), controller, 1.2)
+    simulate(DigitalTwin(yumi, plant.config), controller, controller.calibration_time + 0.05)
     result = controller.calibration
     assert result.accepted, result.reason
     assert result.friction_scale[2] > 1.5
@@ -120,7 +126,7 @@ def test_friction_far_above_the_model_is_measured_not_refused(yumi):
 def test_the_motion_slides_above_the_stribeck_range_and_reads_the_level(yumi, slow, monkeypatch):
     """Lugre #29's joint 4 (Stribeck velocity 0.021 rad/s, stiction 1.42× Coulomb).
 
-    At 10 mrad and 0.1 rad/s it slides, and its level comes out within 10 % of the plant's
+    At 15 mrad and 0.1 rad/s it slides, and its level comes out within 10 % of the plant's
     at the pose (half the 20 % the controller then assumes). At 5 mrad and 0.05 rad/s
     (before) it sticks and jumps at 3× the pace: read through the robot's filtered
     velocity, the edges of its jumps passed through the pace band and the level came out
@@ -131,7 +137,7 @@ def test_the_motion_slides_above_the_stribeck_range_and_reads_the_level(yumi, sl
         slow_calibration_motion(monkeypatch)
     plant = sample_plant(yumi, 29, "lugre")
     controller = LeadThrough(yumi, calibrate=True)
-    simulate(DigitalTwin(yumi, plant.config), controller, 1.0)
+    simulate(DigitalTwin(yumi, plant.config), controller, controller.calibration_time + 0.05)
     result = controller.calibration
     gain = plant.config.sensors.torque_gain[3]  # the level in commanded torque
     true = plant.config.friction.coulomb_level(result.pose)[3] / gain
@@ -155,7 +161,7 @@ def test_a_level_nothing_measured_carries_the_unit_spread(yumi):
     plant = sample_plant(yumi, 1, "dry")  # stiction holds joint 3 in its calibration
     controller = LeadThrough(yumi, calibrate=True)
     np.testing.assert_allclose(controller.law.friction_error, 0.35)
-    simulate(DigitalTwin(yumi, plant.config), controller, 1.2)
+    simulate(DigitalTwin(yumi, plant.config), controller, controller.calibration_time + 0.05)
     measured = controller.calibration.measured
     assert controller.calibration.accepted and not measured.all() and measured.any()
     np.testing.assert_allclose(controller.level_error.far, np.where(measured, 0.2, 0.35))
@@ -370,10 +376,11 @@ def test_an_offset_of_the_torque_measurement_is_read_and_never_commanded(yumi, m
     np.testing.assert_allclose(controller.torque_offset, OFFSETS, atol=0.05)
     assert "measured torque offset up to 0.2" in controller.calibration.summary()
     exact = LeadThrough(yumi, "passive", calibrate=True)
-    simulate(DigitalTwin(yumi, _measured_with(plant.config, None)), exact, 1.5)
+    simulate(DigitalTwin(yumi, _measured_with(plant.config, None)), exact,
+             exact.calibration_time + 0.1)  # fmt: skip
     np.testing.assert_allclose(controller.calibration.gravity_error,
                                exact.calibration.gravity_error, atol=0.05)  # fmt: skip
-    rest = sim.t > 1.0
+    rest = sim.t > controller.calibration_time + 0.1
     assert np.max(np.abs(sim.q_true[rest] - sim.q_true[rest][0])) < 1e-3
     monkeypatch.setattr(CalibrationRun, "torque_offset", lambda self: None)  # as before
     before = LeadThrough(yumi, "passive", calibrate=True)
@@ -391,7 +398,7 @@ def test_a_measured_torque_far_off_its_command_refuses_the_calibration(yumi):
     simulate(DigitalTwin(yumi, config), controller, 1.5)
     result = controller.calibration
     assert not result.accepted and "\n" not in result.reason
-    assert "joint 2's measured torque is +3.0" in result.reason
+    assert re.search(r"joint 2's measured torque is \+(2\.9|3\.0)\d* Nm", result.reason)
     assert "Nm off its command: is it the motor torque?" in result.reason
     assert result.torque_offset is None and np.all(controller.torque_offset == 0.0)
     assert controller.state is SupervisorState.TEACHING
@@ -407,7 +414,8 @@ def test_the_offset_is_read_only_once_a_command_has_reached_the_drive(yumi):
     sensors = SensorModel(torque_ripple=0.0, torque_noise_std=0.0, torque_offset=OFFSETS)
     parameters = LeadThroughParameters(calibration=CalibrationParameters(settle_time=0.0))
     controller = LeadThrough(yumi, parameters=parameters, calibrate=True)
-    simulate(DigitalTwin(yumi, TwinConfig(seed=1, sensors=sensors)), controller, 1.2)
+    simulate(DigitalTwin(yumi, TwinConfig(seed=1, sensors=sensors)), controller,
+             controller.calibration_time + 0.05)  # fmt: skip
     np.testing.assert_allclose(controller.torque_offset, OFFSETS, atol=1e-3)
 
 
@@ -515,16 +523,21 @@ def test_the_error_stated_at_the_pose_bounds_how_far_a_level_read_is_off(yumi):
     assert np.all(stated < 0.1)
 
 
-def test_a_level_read_far_below_the_model_refuses_the_calibration_and_widens_its_error(yumi):
+def test_a_level_read_far_below_the_model_refuses_the_calibration_and_widens_its_error(
+    yumi, monkeypatch
+):
     """Dry #11 with every level 0.45–0.5 of the model's: joint 1 reads a third of it.
 
     Refused (outside the plausible band), the controller guides with the model as given,
     joint 1 with a friction error as large as the reading shows (a refused calibration's
-    released arm: ``tests/test_released_arm.py``).
+    released arm: ``tests/test_released_arm.py``). With the 6 Hz loop it was found with:
+    under the 4 Hz one, the model's friction fed forward runs joint 5 four strokes off
+    first, which refuses the run and leaves that joint none of its friction.
     """
+    built_as(monkeypatch, CalibrationParameters(**SIX_HERTZ))
     plant = sample_plant(yumi, 11, "dry", PlantRanges(friction_scale=(0.45, 0.5)))
     controller = LeadThrough(yumi, calibrate=True)
-    simulate(DigitalTwin(yumi, plant.config), controller, 1.2)
+    simulate(DigitalTwin(yumi, plant.config), controller, controller.calibration_time + 0.05)
     result = controller.calibration
     assert not result.accepted and "joint 1's friction seems" in result.reason
     read = result.friction_scale[0]
@@ -619,7 +632,9 @@ def test_the_settings_follow_a_slower_control_period():
     defaults = CalibrationParameters()
     assert defaults.at_period(0.004) is defaults and defaults.at_period(0.001) is defaults
     slow = defaults.at_period(0.008)
-    assert 3.5 < slow.bandwidth < 4.5
+    assert 3.5 < slow.bandwidth < defaults.bandwidth
+    gains = calibration_gains(2.0 * np.pi * slow.bandwidth)
+    assert loop_damping(gains, 0.008) >= defaults.slow_rate_damping
     assert slow.stroke * slow.bandwidth == pytest.approx(defaults.stroke * defaults.bandwidth)
     assert slow.frequency / slow.bandwidth == pytest.approx(defaults.frequency / defaults.bandwidth)
     controller = LeadThrough(lt.robots.yumi(), dt=0.008, calibrate=True)
@@ -634,8 +649,9 @@ def test_at_125_hz_the_calibration_is_accepted_where_the_250_hz_settings_were_no
 ):
     """Plants of the guiding benchmark at 125 Hz (delays 1–2 periods, 8–16 ms).
 
-    With the 250 Hz settings (6 Hz, 10 mrad) the wrist jumped 42–48 mrad off the motion
-    (refused: touched?) or the shoulder ran at 2.1 rad/s (refused: stopped, held).
+    With the 250 Hz settings of the release that found it (6 Hz, 10 mrad) the wrist jumped
+    42–48 mrad off the motion (refused: touched?) or the shoulder ran at 2.1 rad/s
+    (refused: stopped, held).
     """
     plant = sample_plant(yumi, seed, physics)
     config = dataclasses.replace(plant.config, control_dt=0.008)
@@ -648,6 +664,64 @@ def test_at_125_hz_the_calibration_is_accepted_where_the_250_hz_settings_were_no
 
     assert calibrate().accepted
     monkeypatch.setattr(CalibrationParameters, "at_period", lambda self, dt: self)
+    built_as(monkeypatch, CalibrationParameters(**SIX_HERTZ))
     refused = calibrate()
     assert not refused.accepted and ("off the calibration motion" in refused.reason
                                      or "faster than" in refused.reason)  # fmt: skip
+
+
+def test_at_250_hz_and_faster_the_loop_decays_with_two_periods_of_delay():
+    """Linearised with the plant family's longest delay, two periods, the loop decays.
+
+    The 6 Hz of before grew there at 250 Hz (ζ −0.02; the loop simulated in time grows
+    where the model says so, ``test_tracking``); 4 Hz keeps 0.20. Slower, the loop keeps
+    ``slow_rate_damping`` with one period of delay only (its docstring says why).
+    """
+    for dt in (0.001, 0.002, 0.004):
+        settings = CalibrationParameters().at_period(dt)
+        assert loop_damping(calibration_gains(2.0 * np.pi * settings.bandwidth), dt, 2) > 0.15
+    assert loop_damping(calibration_gains(2.0 * np.pi * SIX_HERTZ["bandwidth"]), 0.004, 2) < 0.0
+
+
+def _panda() -> lt.RobotDescription:
+    """The shipped Panda description, without the warning of its assumed drive data."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the Panda's assumed gear ratio: not what is tested
+        return lt.robots.panda()
+
+
+def test_a_panda_with_two_periods_of_delay_reads_its_levels_and_then_rests(monkeypatch):
+    """Panda dry #4 of the guiding family, its delay two periods (8 ms at 250 Hz).
+
+    Its levels (0.13–0.33 Nm) are small beside its inertia, so friction damps its
+    calibration loop little. With the 6 Hz loop of before joint 3 rang up to 2.6× the
+    motion's speed, read its level 1.7× the truth, and the arm it left guiding kept moving
+    for 0.8 s: the 4 Hz loop slides every joint at the motion's pace.
+    """
+    panda = _panda()
+    plant = sample_plant(panda, 4, "dry", PlantRanges(delay_periods=(2, 2)))
+
+    def run() -> tuple[np.ndarray, float, float]:
+        """Measured over true level of each joint measured, fastest joint during, after."""
+        controller = LeadThrough(panda, calibrate=True)
+        twin = DigitalTwin(panda, plant.config)
+        sim = simulate(twin, controller, controller.calibration_time + 0.5)
+        result = controller.calibration
+        assert result is not None and result.accepted and result.measured is not None
+        true = plant.config.friction.level(result.pose, np.full(7, 1e3))
+        gain = plant.config.sensors.torque_gain  # the level in commanded torque
+        ratio = controller.friction.coulomb_level(result.pose) * gain / true
+        during = sim.t < controller.calibration_time
+        after = sim.t > controller.calibration_time + 0.2
+        return (ratio[result.measured], np.abs(sim.qd_true[during]).max(),
+                np.abs(sim.qd_true[after]).max())  # fmt: skip
+
+    levels, fastest, resting = run()
+    speed = CalibrationParameters().speed
+    assert np.all(np.abs(levels - 1.0) < 0.1) and len(levels) == 7
+    assert fastest < 2.0 * speed and resting < 0.01
+    built_as(monkeypatch, CalibrationParameters(**SIX_HERTZ))
+    levels, fastest, resting = run()
+    assert levels.max() > 1.4 and fastest > 2.0 * speed and resting > 0.05

@@ -78,6 +78,21 @@ def test_a_joint_faster_than_max_speed_stops_the_calibration():
                                      "show (joint 5 0.00×)")  # fmt: skip
 
 
+def test_a_joint_far_off_its_motion_refuses_the_calibration_and_keeps_none_of_its_friction():
+    """Five strokes off the motion: touched, or the model far off; its level is not sure."""
+    robot = lt.robots.yumi()
+    run = CalibrationRun(lt.Dynamics(robot), lt.FrictionModel.from_robot(robot), robot.home())
+    q = robot.home()
+    q[2] += 5.0 * CalibrationParameters().stroke
+    run.command(0.0, q, np.zeros(7))
+    result = run.result()
+    assert not result.accepted and "joint 3 was 75 mrad off the calibration motion" in result.reason
+    assert "\n" not in result.reason and result.reason.endswith("Its friction not trusted")
+    nominal = lt.FrictionModel.from_robot(robot)
+    expected = np.where(np.arange(7) == 2, 1.0, nominal.relative_error)
+    np.testing.assert_array_equal(result.friction(nominal).relative_error, expected)
+
+
 def test_a_payload_that_shows_in_no_joint_is_zero_not_nan():
     """A pose where no joint feels a flange load (regressor 0): payload 0, no NaN anywhere."""
     robot = lt.robots.yumi()
@@ -100,7 +115,8 @@ def test_a_wrist_that_breaks_out_of_stiction_faster_than_1_rad_s_still_calibrate
     robot = lt.robots.yumi()
     plant = sample_plant(robot, 1, "dry", PlantRanges(position_amplitude=0.25))
     controller = lt.LeadThrough(robot, calibrate=True)
-    sim = simulate(DigitalTwin(robot, plant.config), controller, 1.0)
+    sim = simulate(DigitalTwin(robot, plant.config), controller,
+                   controller.calibration_time + 0.05)  # fmt: skip
     peak = np.abs(sim.qd).max(axis=0)
     assert 1.0 < peak[5] < CalibrationParameters().max_speed
     assert controller.calibration.accepted, controller.calibration.reason

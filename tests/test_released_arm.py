@@ -24,6 +24,7 @@ from as_found import (
     friction_margin_share,
     observer_readings,
     own_rest_bands,
+    six_hertz_calibration,
     slow_calibration_motion,
     thesis_compensation,
     two_second_park,
@@ -123,13 +124,14 @@ def _calibration_of_the_time(monkeypatch):
 
 
 #: Dry #1 of a family whose levels are 0.5–1.5 of the model's: under the calibration's own
-#: feed-forward its wrist (0.52× the model's level) jumps at 2.01 rad/s and stops the run.
+#: feed-forward its wrist (0.52× the model's level) runs 60 mrad (four strokes) off the
+#: motion and stops the run (under the 6 Hz loop of before: at 2.01 rad/s, too fast).
 RAN_AWAY = Case("dry", 1, "relaxed", "upwards", PlantRanges(friction_scale=(0.5, 1.5)))
 
 
 @pytest.mark.parametrize("trusted", [False, True], ids=["not trusted", "model's error"])
-def test_a_joint_the_calibration_ran_too_fast_keeps_none_of_its_friction(trusted, monkeypatch):
-    """Refused by the speed check, the fast joint's friction error is 1, and the arm stops.
+def test_a_joint_the_calibration_ran_away_keeps_none_of_its_friction(trusted, monkeypatch):
+    """Refused as run away (off its motion), that joint's friction error is 1: the arm stops.
 
     With the model's level and error (as before), the compensation and the estimate trust a
     level twice the wrist's: the released arm ran on 1.25 rad in active mode.
@@ -491,9 +493,11 @@ def test_a_refused_calibration_that_read_a_level_low_still_stops_the_released_ar
     Without (the refused calibration left no trace) the model's level, about twice the
     plant's, reads as a push along the motion that the 0.35 margin does not cover. With the
     observer's readings of the time: the momentum balance reads joint 1 at 0.64× (the
-    plant's 0.65×), inside the plausible band, and the calibration is accepted.
+    plant's 0.65×), inside the plausible band, and the calibration is accepted. And with
+    the 6 Hz loop of the time: the 4 Hz one reads joint 1 inside the band too.
     """
     observer_readings(monkeypatch)
+    six_hertz_calibration(monkeypatch)
     if not widened:
         monkeypatch.setattr(Calibration, "lowered", lambda self: np.ones(7))
     result = run_case(READ_LOW, "active")

@@ -33,8 +33,10 @@ calibration reading the torque measurement's offset and taking it off
 a start-up calibration has been accepted (``CoulombCompensationParameters.follow_push``),
 then the calibration reading the momentum balance over each stretch a joint slides at pace
 (``calibration.sliding_readings``), then the drives' torque ripple in each joint's band, which
-the joints read together weigh (``LeadThroughParameters.torque_ripple``). A faster step must
-reproduce them.
+the joints read together weigh (``LeadThroughParameters.torque_ripple``), then the calibration
+tracking at 4 Hz over 15 mrad, a loop that decays with two periods of delay, and a joint run
+off its motion keeping none of its friction (``CalibrationParameters.bandwidth``,
+``CalibrationRun.runaway``). A faster step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

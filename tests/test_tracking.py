@@ -133,6 +133,18 @@ def test_the_loop_model_grows_or_decays_as_the_loop_simulated_in_time(bandwidth,
     assert np.sign(growth) == -np.sign(modelled)
 
 
+def test_a_damping_asked_for_is_kept_by_the_largest_bandwidth_up_to_the_ceiling():
+    """With ``damping`` given, slower rates keep it instead of the ceiling's at 250 Hz."""
+    gains = pd_gains(1.0, 0.25)
+    assert period_bandwidth(4.0, 0.004, gains, damping=0.9) == 4.0  # 250 Hz: the ceiling
+    assert period_bandwidth(4.0, 0.005, gains, damping=0.14) == 4.0  # it keeps 0.14 there
+    for dt in (0.008, 0.01):
+        bandwidth = period_bandwidth(4.0, dt, gains, damping=0.14)
+        assert bandwidth > period_bandwidth(4.0, dt, gains)  # 0.14 asks less than 4 Hz's 0.36
+        assert loop_damping(gains(2.0 * np.pi * bandwidth), dt) >= 0.14
+        assert loop_damping(gains(2.0 * np.pi * 1.01 * bandwidth), dt) < 0.14
+
+
 def test_a_loop_damped_more_at_250_hz_than_any_bandwidth_keeps_slower_gets_the_best_one():
     """A 2 Hz calibration loop is damped 0.71 at 250 Hz, more than any keeps at 125 Hz."""
     gains = pd_gains(1.0, 0.25)

@@ -11,10 +11,10 @@ direction at the motion's pace, the torque the model misses there (SPEC §5:
     gravity error   ΔG   = (τ̂₊ + τ̂₋) / 2      (= G_model − G_true at q₀)
     Coulomb error   Δτ_C = (τ̂₊ − τ̂₋) / 2      (= τ_C,model − τ_C,true)
 
-The motion slides every joint 10 mrad at 0.1 rad/s, above the Stribeck range of the
+The motion slides every joint 15 mrad at 0.1 rad/s, above the Stribeck range of the
 arms it must work on (Stribeck velocities up to 0.03 rad/s on the plants of
 ``benchmarks/guiding_quality.py``): slower, friction still falls with speed there, and a
-joint held by a 6 Hz tracking loop sticks and jumps instead of sliding. At 5 mrad and
+joint held by a 4–6 Hz tracking loop sticks and jumps instead of sliding. At 5 mrad and
 0.05 rad/s (before) the heavy joints moved in bursts of 40–60 ms, and the readings of
 lugre #29's joint 4, stuck and jumping at 3× the pace, were its filtered velocity's edges
 through the pace band (+0.22 → +0.06 Nm rising, −0.33 Nm falling, the same direction):
@@ -78,6 +78,13 @@ gain of ``ω² M⁻¹ diag(M)``, whose eigenvalues reach 3.9 on a Panda without 
 inertia (2.5 on the YuMi) and push the crossover ~2× past what the one-period delay
 allows: the Panda's wrist joints then ran away at 2.8 → 6.5 rad/s within 32 ms,
 nobody touching. With ``M(q)`` every mode has the bandwidth ω.
+
+That bandwidth is 4 Hz at 250 Hz, the replay's (:mod:`~leadthrough.control.tracking`),
+whose loop, linearised with two periods of delay (the most of the plant family), keeps a
+damping ratio of 0.20. The 6 Hz of before had −0.02 there: friction damps it on the
+YuMi, but a Panda's levels are small beside its inertia, and on its dry #4 with two
+periods of delay joint 3 rang up to 2.6× the motion's speed, read its level 1.7× the
+truth, and the arm kept moving for 0.8 s after (``tests/test_calibration.py``).
 """
 
 from __future__ import annotations
@@ -140,14 +147,23 @@ class CalibrationParameters:
             count as sliding at the motion's pace (faster, a joint is jumping).
         cycles: Back-and-forth cycles [–].
         settle_time: Rest before the motion, for the observer to settle [s].
-        bandwidth: Bandwidth of the joint tracking at 250 Hz and faster [Hz]: stiff enough
-            that the lightest joint breaks away within a fraction of the stroke (below 6 Hz
-            the YuMi's wrist sticks 20 mrad off on 2 of the 8 plants of
-            ``benchmarks/guiding_quality.py``), soft enough for a delayed, filtered velocity
-            (above it the wrist's stick-slip bursts pass 1 rad/s on 2 of 8). At 6 Hz all 8
-            calibrated with the 5 mrad motion, and all 64 of seeds 1–32 calibrate with the
-            10 mrad one. At a slower rate the loop's delay allows less
-            (:meth:`at_period`).
+        bandwidth: Bandwidth of the joint tracking at 250 Hz and faster [Hz]: soft enough
+            that the loop, with two periods of delay and a filtered velocity, still decays
+            (damping ratio 0.20 at 4 Hz, −0.02 at 6 Hz, the default before, which rang a
+            Panda's joint 3 to 2.6× the motion's speed), stiff enough that the lightest
+            joint breaks away within a fraction of the stroke: with 10 mrad, 4 Hz left one
+            of the 32 dry YuMi plants of ``benchmarks/guiding_quality.py`` refused; with the
+            stroke grown as the bandwidth fell (15 mrad: the motion as slow beside its
+            loop), all 64 of seeds 1–32 calibrate with one or two periods of delay. At a
+            slower rate the loop's delay allows less (:meth:`at_period`).
+        slow_rate_damping: Least damping ratio of the tracking loop, linearised with one
+            period of delay, below 250 Hz [–] (:meth:`at_period`). 0.14 is what the 6 Hz
+            loop had at 250 Hz, the stiffest the YuMi plants' wrists were seen to need
+            there: at 125 and 100 Hz (3.95 and 3.41 Hz) every plant of seeds 1–8
+            calibrates, while the loop grows with two periods of delay (ζ −0.07 and −0.08).
+            One that decays with two (what 0.36 gives: 2.8 and 2.44 Hz, the 4 Hz loop's
+            margin at 250 Hz) lets stiction throw the wrist of dry #1 and #4 four strokes
+            off at 100 Hz (refused), and reads them worse at 125 Hz (effort 0.77 → 0.82).
         max_speed: Fastest a joint may move during the calibration [rad/s]; faster,
             the calibration stops (refused) and the arm is held against gravity. 20× the
             motion's speed, between what a stick-slip jump reaches and a runaway: a light
@@ -176,7 +192,7 @@ class CalibrationParameters:
             ran away 112 mrad when released.
         friction_accuracy: Relative error of a measured Coulomb level away from the
             calibration pose and speed [–]: what the controller assumes of the friction of
-            the joints that slid. A 10 mrad stroke sees neither the position
+            the joints that slid. A 15 mrad stroke sees neither the position
             dependence (±15 % on the plants of ``benchmarks/guiding_quality.py``) nor the
             Stribeck curve: with 0.1 released arms crept up to 349 mrad there, with 0.2
             at most 21 mrad.
@@ -194,11 +210,12 @@ class CalibrationParameters:
             levels carry ``friction_accuracy`` everywhere, the pose included.
     """
 
-    stroke: float = 0.01
+    stroke: float = 0.015
     speed: float = 0.1
     cycles: int = 2
     settle_time: float = 0.1
-    bandwidth: float = 6.0
+    bandwidth: float = 4.0
+    slow_rate_damping: float = 0.14
     max_speed: float = 2.0
     max_payload: float | None = None
     max_friction_change: float = 0.85
@@ -207,8 +224,8 @@ class CalibrationParameters:
     level_slope: float | None = 0.3
 
     def __post_init__(self) -> None:
-        names = ("stroke", "speed", "bandwidth", "max_speed", "max_friction_change",
-                 "friction_accuracy", "max_torque_offset")  # fmt: skip
+        names = ("stroke", "speed", "bandwidth", "slow_rate_damping", "max_speed",
+                 "max_friction_change", "friction_accuracy", "max_torque_offset")  # fmt: skip
         for name in names:
             real(name, getattr(self, name), minimum=0.0, strict=True, error=ParameterError)
         if self.max_payload is not None:
@@ -235,15 +252,17 @@ class CalibrationParameters:
         """These settings for a control period ``dt`` [s]: the same at 250 Hz and faster.
 
         Slower, the tracking's bandwidth drops to what the loop's delay allows
-        (:func:`~leadthrough.control.tracking.period_bandwidth`: 6 Hz → 3.96 Hz at
-        125 Hz, 3.41 Hz at 100 Hz), and the stroke grows by as much, so that the motion
-        stays as slow beside its loop (the run 1.3 s instead of 0.9 s at 125 Hz) and the 4-stroke
-        check as far from the stick-slip jumps a slower loop lets a light joint make. With
-        6 Hz and 10 mrad at 125 Hz, 5 of the 8 plants of seeds 1–4 were refused (joints 42–48
-        mrad off, one at 2.1 rad/s); with 3.96 Hz alone, 2 of 16 at 100 Hz (40–41 mrad);
-        with both, none of 16 at 125 or 100 Hz.
+        (:func:`~leadthrough.control.tracking.period_bandwidth` with
+        ``slow_rate_damping``: 4 Hz → 3.95 Hz at 125 Hz, 3.41 Hz at 100 Hz), and the
+        stroke grows by as much, so that the motion stays as slow beside its loop (the run
+        1.3 s at 250 Hz, 1.3 s at 125 Hz, 1.5 s at 100 Hz) and the 4-stroke check as far
+        from the stick-slip jumps a slower loop lets a light joint make. With 6 Hz and 10
+        mrad at 125 Hz, 5 of the 8 plants of seeds 1–4 were refused (joints 42–48 mrad
+        off, one at 2.1 rad/s); with 3.96 Hz alone, 2 of 16 at 100 Hz (40–41 mrad); with
+        both, none of 16 at 125 or 100 Hz.
         """
-        bandwidth = period_bandwidth(self.bandwidth, dt, calibration_gains)
+        bandwidth = period_bandwidth(self.bandwidth, dt, calibration_gains,
+                                     damping=self.slow_rate_damping)  # fmt: skip
         if bandwidth == self.bandwidth:
             return self
         return dataclasses.replace(self, bandwidth=bandwidth,
@@ -341,10 +360,12 @@ class Calibration:
         compensation pushes with it, while one it understates only makes guiding heavier.
         So a level read at ``r`` < 1 times the model's widens that joint's relative
         error to at least ``1 − r``: more friction margin, never less. A joint that ran
-        faster than ``max_speed`` under the calibration's own feed-forward (the model's
-        friction among it) counts as read at 0: none of its model's level is sure (error 1:
-        no compensation, the whole level as margin). On dry #1 of a family whose levels are
-        0.5–1.5 of the model's (its wrist 0.52×), the wrist jumped at 2.01 rad/s; guided
+        faster than ``max_speed`` or more than four strokes off its motion under the
+        calibration's own feed-forward (the model's friction among it; or a hand: the two
+        cannot be told apart) counts as read at 0: none of its model's level is sure (error
+        1: no compensation, the whole level as margin). On dry #1 of a family whose levels
+        are 0.5–1.5 of the model's (its wrist 0.52×), the wrist jumped at 2.01 rad/s under
+        the 6 Hz loop of before, and ran 60 mrad off the motion under the 4 Hz one; guided
         with the model's level and error, the released arm ran 1.25 rad (passive 3.1 rad).
         """
         if self.measured is None:
@@ -492,7 +513,8 @@ class CalibrationRun:
         self._error_integral = np.zeros_like(self.pose)
         self._last_t = 0.0
         self.disturbance: str | None = None  # why the calibration must stop, if it must
-        self.too_fast: int | None = None  # the joint that ran faster than max_speed, if one
+        # the joint that ran faster than max_speed or too far off the motion, if one
+        self.runaway: int | None = None
         self._balance = MomentumBalance(dynamics, friction)  # what the readings come from
         self._discrepancy = np.zeros_like(self.pose)  # Σ (τ_measured − τ_commanded) [Nm]
         self._discrepancies = 0
@@ -528,14 +550,15 @@ class CalibrationRun:
         p = self.parameters
         speed, error = np.abs(qd), np.abs(q_ref - q)
         if np.max(speed) > p.max_speed:
-            joint = self.too_fast = int(np.argmax(speed))
+            joint = self.runaway = int(np.argmax(speed))
             self.disturbance = (f"joint {joint + 1} moved at {speed[joint]:.3f} rad/s, faster "
                                 f"than the calibration's {p.max_speed:g} rad/s: stopped, "
                                 "arm held, its friction not trusted")  # fmt: skip
         elif np.max(error) > _DISTURBED * p.stroke:
-            joint = int(np.argmax(error))
+            joint = self.runaway = int(np.argmax(error))
             self.disturbance = (f"joint {joint + 1} was {1e3 * error[joint]:.0f} mrad off the "
-                                "calibration motion: was the arm touched?")  # fmt: skip
+                                "calibration motion: was the arm touched? Its friction not "
+                                "trusted")  # fmt: skip
 
     def record(
         self, t: float, q: FloatArray, tau: FloatArray, discrepancy: FloatArray | None = None
@@ -583,10 +606,10 @@ class CalibrationRun:
         """
         p = self.parameters
         if self.disturbance is not None:
-            if self.too_fast is None:
+            if self.runaway is None:
                 return self._refused(self.disturbance)
             # none of the friction that ran a joint away is sure: read at 0 (lowered)
-            untrusted = np.arange(self.pose.shape[0]) == self.too_fast
+            untrusted = np.arange(self.pose.shape[0]) == self.runaway
             return self._refused(self.disturbance, np.where(untrusted, 0.0, 1.0), untrusted)
         offset = self.torque_offset()
         if offset is not None:

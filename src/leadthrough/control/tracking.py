@@ -111,31 +111,36 @@ def loop_damping(
 _SCAN = np.geomspace(1.0, 0.02, 60)
 
 
-def period_bandwidth(ceiling: float, dt: float, gains: LoopGains) -> float:
+def period_bandwidth(
+    ceiling: float, dt: float, gains: LoopGains, damping: float | None = None
+) -> float:
     """The bandwidth [Hz] a loop of ``gains`` may have at period ``dt`` [s].
 
     ``ceiling`` [Hz] at :data:`VERIFIED_PERIOD` or faster; at a slower rate, the largest
-    bandwidth up to it whose :func:`loop_damping` (one period of delay) is no less than the
-    ceiling's at :data:`VERIFIED_PERIOD` (at 125 Hz, 6 Hz → 3.92 Hz for a PD with ζ = 1,
-    3.96 Hz with the calibration's integral), or, where no bandwidth down to 2 % of the
-    ceiling keeps that much at ``dt`` (a loop damped 0.7 at 250 Hz, an integral that takes
-    damping at any bandwidth), no less than the most any of them keeps.
+    bandwidth up to it whose :func:`loop_damping` (one period of delay) is no less than
+    ``damping`` [–], by default the ceiling's at :data:`VERIFIED_PERIOD` (at 125 Hz, 6 Hz →
+    3.92 Hz for a PD with ζ = 1, 3.96 Hz with the calibration's integral), or, where no
+    bandwidth down to 2 % of the ceiling keeps that much at ``dt`` (a loop damped 0.7 at
+    250 Hz, an integral that takes damping at any bandwidth), no less than the most any of
+    them keeps.
     """
     if dt <= VERIFIED_PERIOD * (1.0 + 1e-6):  # a measured period's last digits change nothing
         return ceiling
 
-    def damping(fraction: float) -> float:
+    def loop(fraction: float) -> float:
         return loop_damping(gains(2.0 * np.pi * fraction * ceiling), dt)
 
-    scanned = np.array([damping(fraction) for fraction in _SCAN])
-    target = min(loop_damping(gains(2.0 * np.pi * ceiling), VERIFIED_PERIOD), scanned.max())
+    scanned = np.array([loop(fraction) for fraction in _SCAN])
+    if damping is None:
+        damping = loop_damping(gains(2.0 * np.pi * ceiling), VERIFIED_PERIOD)
+    target = min(damping, scanned.max())
     index = int(np.argmax(scanned >= target))  # the first, i.e. the largest, that keeps it
     if index == 0:
         return ceiling
     low, high = _SCAN[index], _SCAN[index - 1]
     while high - low > 1e-4:  # bisection between a fraction that keeps it and one that does not
         middle = 0.5 * (low + high)
-        low, high = (middle, high) if damping(middle) >= target else (low, middle)
+        low, high = (middle, high) if loop(middle) >= target else (low, middle)
     return float(low * ceiling)
 
 

@@ -41,7 +41,7 @@ def teaching_actions(robot: RobotDescription) -> list[Action]:
     line, circle = every["pull the tool 15 cm"], every["draw a circle"]
     press, lift = every["press the tool on the table"], every["lift the tool back"]
     return [
-        replace(line, start=1.0, stop=5.0),
+        replace(line, start=1.5, stop=5.0),  # after the 1.3 s start-up calibration
         replace(circle, start=6.5, stop=13.5),
         replace(press, start=14.0, stop=18.0),
         replace(lift, start=18.5, stop=21.5),

@@ -107,7 +107,9 @@ class TeachingSession:
         last = robot.n_joints - 1  # the wrist's last joint (joint 7 of the YuMi)
         end_stop = f"turn joint {last + 1} into its end-stop"
         return [
-            Action(1.0, 5.0, _line((0.0, 0.15, 0.02), 3.0), "pull the tool 15 cm"),
+            # the hand takes the arm once the controller's start-up calibration (1.3 s)
+            # is over: a hand on the arm before refuses it
+            Action(1.5, 5.0, _line((0.0, 0.15, 0.02), 3.0), "pull the tool 15 cm"),
             Action(8.0, 15.0, _circle(0.06, 6.0), "draw a circle"),
             Action(18.0, 23.0, _line((0.0, 0.0, down), 2.0), "press the tool on the table"),
             Action(26.0, 30.0, _to_end_stop(last, robot), end_stop),
