@@ -11,7 +11,8 @@ Prints each plant's relative errors per joint [%] (blank: the joint did not slid
 ways and kept its model), the fastest joint during the calibration and the fastest 0.2–0.5
 s after it (the arm left to the controller, nobody touching) [rad/s], then the median, 90th
 percentile and largest |error|. ``--delay N`` gives every plant N periods of delay (the
-family: 1–2); ``--bandwidth`` the calibration's tracking at 250 Hz (the default 4 Hz).
+family: 1–2); ``--bandwidth`` the calibration's tracking at 250 Hz (the default 4 Hz;
+the previous default was ``--bandwidth 6 --stroke 0.01``).
 """
 
 from __future__ import annotations
@@ -108,7 +109,8 @@ def main(argv: list[str] | None = None) -> None:
     magnitude = 100 * np.abs(np.array([one.errors for one in figures]))
     print(f"|error|: median {np.nanmedian(magnitude):.1f} %, 90th percentile "
           f"{np.nanpercentile(magnitude, 90):.1f} %, largest {np.nanmax(magnitude):.1f} %, "
-          f"{int(np.isnan(magnitude).sum())} joint(s) not measured; fastest joint during "
+          f"{int(np.isnan(magnitude).sum())} joint(s) not measured (refused plants' "
+          f"included); fastest joint during "
           f"{max(one.fastest for one in figures):.2f} rad/s, after "
           f"{max(one.after for one in figures):.3f} rad/s; refused "
           f"{sum(not one.accepted for one in figures)} of {len(figures)}")  # fmt: skip

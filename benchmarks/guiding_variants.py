@@ -29,9 +29,10 @@ from leadthrough.estimation.tool_force import fuse
 from leadthrough.friction.compensation import CoulombCompensationParameters
 from observer_variants import SMOOTH_RATE
 
-#: A calibration that slides every joint 10 mrad at 0.1 rad/s (the default since it was
-#: made so; 5 mrad at 0.05 rad/s when the README's variant table was measured).
-LONG_STROKE = {"stroke": 0.01, "speed": 0.1}
+#: A calibration that slides every joint 10 mrad at 0.1 rad/s under the 6 Hz loop (the
+#: default from when it was made so until the 4 Hz loop, which slides 15 mrad; 5 mrad at
+#: 0.05 rad/s when the README's variant table was measured).
+LONG_STROKE = {"stroke": 0.01, "speed": 0.1, "bandwidth": 6.0}
 
 
 def _build(

@@ -35,6 +35,14 @@ def six_hertz_calibration(monkeypatch) -> None:
     built_as(monkeypatch, CalibrationParameters(**SIX_HERTZ))
 
 
+def constant_gravity_bias(monkeypatch) -> None:
+    """Every calibration's gravity error stays a constant, as before ``gravity_share``."""
+    from leadthrough.control import lead_through
+
+    monkeypatch.setattr(lead_through, "gravity_share",
+                        lambda bias, gravity, limit: np.zeros_like(bias))  # fmt: skip
+
+
 def constant_level_error(monkeypatch) -> None:
     """Every calibration leaves a level it read its ``friction_accuracy`` at every pose.
 

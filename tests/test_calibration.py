@@ -14,6 +14,7 @@ from leadthrough.control.calibration import (
     CalibrationParameters,
     CalibrationRun,
     calibration_gains,
+    gravity_share,
     implausible_friction,
 )
 from leadthrough.control.lead_through import LeadThrough
@@ -111,11 +112,19 @@ def test_friction_far_above_the_model_is_measured_not_refused(yumi, monkeypatch)
     Hz loop it was found with: under the 4 Hz one the joint sticks too often to count as
     measured and keeps the model's level, which understates it (heavier, never unsafe).
     """
-    built_as(monkeypatch, CalibrationParameters(**SIX_HERTZ))
     plant = sample_plant(yumi, 11, "dry")
-    controller = LeadThrough(yumi, calibrate=True)
-    simulate(DigitalTwin(yumi, plant.config), controller, controller.calibration_time + 0.05)
-    result = controller.calibration
+
+    def calibrated() -> Calibration:
+        controller = LeadThrough(yumi, calibrate=True)
+        twin = DigitalTwin(yumi, plant.config)
+        simulate(twin, controller, controller.calibration_time + 0.05)
+        assert controller.calibration is not None
+        return controller.calibration
+
+    default = calibrated()  # 4 Hz: accepted, joint 3 keeps the model's (lower) level
+    assert default.accepted and not default.measured[2] and default.friction_scale[2] == 1.0
+    built_as(monkeypatch, CalibrationParameters(**SIX_HERTZ))
+    result = calibrated()
     assert result.accepted, result.reason
     assert result.friction_scale[2] > 1.5
     change = CalibrationParameters().max_friction_change
@@ -398,7 +407,8 @@ def test_a_measured_torque_far_off_its_command_refuses_the_calibration(yumi):
     simulate(DigitalTwin(yumi, config), controller, 1.5)
     result = controller.calibration
     assert not result.accepted and "\n" not in result.reason
-    assert re.search(r"joint 2's measured torque is \+(2\.9|3\.0)\d* Nm", result.reason)
+    read = re.search(r"joint 2's measured torque is ([+-][0-9.]+) Nm off", result.reason)
+    assert read and abs(float(read.group(1)) - 3.0) < 0.1
     assert "Nm off its command: is it the motor torque?" in result.reason
     assert result.torque_offset is None and np.all(controller.torque_offset == 0.0)
     assert controller.state is SupervisorState.TEACHING
@@ -534,8 +544,13 @@ def test_a_level_read_far_below_the_model_refuses_the_calibration_and_widens_its
     under the 4 Hz one, the model's friction fed forward runs joint 5 four strokes off
     first, which refuses the run and leaves that joint none of its friction.
     """
-    built_as(monkeypatch, CalibrationParameters(**SIX_HERTZ))
     plant = sample_plant(yumi, 11, "dry", PlantRanges(friction_scale=(0.45, 0.5)))
+    default = LeadThrough(yumi, calibrate=True)  # 4 Hz: joint 5 runs off first
+    simulate(DigitalTwin(yumi, plant.config), default, default.calibration_time + 0.05)
+    assert "joint 5 was" in default.calibration.reason
+    assert "off the calibration motion" in default.calibration.reason
+    assert default.law.friction_error[4] == 1.0
+    built_as(monkeypatch, CalibrationParameters(**SIX_HERTZ))
     controller = LeadThrough(yumi, calibrate=True)
     simulate(DigitalTwin(yumi, plant.config), controller, controller.calibration_time + 0.05)
     result = controller.calibration
@@ -632,9 +647,7 @@ def test_the_settings_follow_a_slower_control_period():
     defaults = CalibrationParameters()
     assert defaults.at_period(0.004) is defaults and defaults.at_period(0.001) is defaults
     slow = defaults.at_period(0.008)
-    assert 3.5 < slow.bandwidth < defaults.bandwidth
-    gains = calibration_gains(2.0 * np.pi * slow.bandwidth)
-    assert loop_damping(gains, 0.008) >= defaults.slow_rate_damping
+    assert slow.bandwidth == pytest.approx(3.95, abs=0.01)  # 4 Hz keeping 0.14 at 125 Hz
     assert slow.stroke * slow.bandwidth == pytest.approx(defaults.stroke * defaults.bandwidth)
     assert slow.frequency / slow.bandwidth == pytest.approx(defaults.frequency / defaults.bandwidth)
     controller = LeadThrough(lt.robots.yumi(), dt=0.008, calibrate=True)
@@ -695,10 +708,10 @@ def _panda() -> lt.RobotDescription:
 def test_a_panda_with_two_periods_of_delay_reads_its_levels_and_then_rests(monkeypatch):
     """Panda dry #4 of the guiding family, its delay two periods (8 ms at 250 Hz).
 
-    Its levels (0.13–0.33 Nm) are small beside its inertia, so friction damps its
+    Its levels (0.13–0.33 Nm at the pose) are small beside its inertia, so friction damps its
     calibration loop little. With the 6 Hz loop of before joint 3 rang up to 2.6× the
     motion's speed, read its level 1.7× the truth, and the arm it left guiding kept moving
-    for 0.8 s: the 4 Hz loop slides every joint at the motion's pace.
+    0.2–0.5 s after (0.056 rad/s): the 4 Hz loop slides every joint at the motion's pace.
     """
     panda = _panda()
     plant = sample_plant(panda, 4, "dry", PlantRanges(delay_periods=(2, 2)))
@@ -724,4 +737,24 @@ def test_a_panda_with_two_periods_of_delay_reads_its_levels_and_then_rests(monke
     assert fastest < 2.0 * speed and resting < 0.01
     built_as(monkeypatch, CalibrationParameters(**SIX_HERTZ))
     levels, fastest, resting = run()
-    assert levels.max() > 1.4 and fastest > 2.0 * speed and resting > 0.05
+    assert levels.max() > 1.4 and fastest > 2.0 * speed and resting > 0.03
+
+
+def test_a_gravity_error_is_a_relative_error_of_g_up_to_the_models_tolerance():
+    """The share is bias / G within ±limit; beyond it the rest stays constant; no G, none."""
+    bias = np.array([0.4, -0.4, 0.4, 0.1, 0.0])
+    gravity = np.array([5.0, 5.0, 1.0, 0.0, 3.0])
+    share = gravity_share(bias, gravity, 0.15)
+    np.testing.assert_allclose(share, [0.08, -0.08, 0.15, 0.0, 0.0])
+    constant = bias - share * gravity  # what stays constant: 0 where k explains it all
+    np.testing.assert_allclose(constant, [0.0, 0.0, 0.25, 0.1, 0.0], atol=1e-15)
+
+
+def test_the_scripted_sessions_take_the_arm_once_the_calibration_is_over(yumi):
+    """A hand on the arm during the calibration refuses it: the sessions wait for its end."""
+    from leadthrough.experiments.demo import teaching_actions
+    from leadthrough.twin.session_operator import teaching_session_operator
+
+    ends = LeadThrough(yumi, calibrate=True).calibration_time
+    assert teaching_session_operator.actions(yumi)[0].start > ends
+    assert teaching_actions(yumi)[0].start > ends

@@ -158,18 +158,21 @@ class CalibrationParameters:
             slower rate the loop's delay allows less (:meth:`at_period`).
         slow_rate_damping: Least damping ratio of the tracking loop, linearised with one
             period of delay, below 250 Hz [–] (:meth:`at_period`). 0.14 is what the 6 Hz
-            loop had at 250 Hz, the stiffest the YuMi plants' wrists were seen to need
-            there: at 125 and 100 Hz (3.95 and 3.41 Hz) every plant of seeds 1–8
-            calibrates, while the loop grows with two periods of delay (ζ −0.07 and −0.08).
-            One that decays with two (what 0.36 gives: 2.8 and 2.44 Hz, the 4 Hz loop's
-            margin at 250 Hz) lets stiction throw the wrist of dry #1 and #4 four strokes
-            off at 100 Hz (refused), and reads them worse at 125 Hz (effort 0.77 → 0.82).
+            loop had at 250 Hz (0.138), the stiffest the YuMi plants' wrists were seen to
+            need there: at 125 and 100 Hz (3.95 and 3.41 Hz) every plant of seeds 1–8 (125
+            Hz) and 1–4 (100 Hz) calibrates, while the loop grows with two periods of delay
+            (ζ −0.07 and −0.08). One that decays with two (what 0.36 gives: 2.8 and 2.44 Hz,
+            the 4 Hz loop's margin at 250 Hz) lets stiction throw the wrist of dry #1 and #4
+            four strokes off at 100 Hz (refused), and guides heavier at 125 Hz (seeds 1–4:
+            effort 0.78 → 0.82).
         max_speed: Fastest a joint may move during the calibration [rad/s]; faster,
             the calibration stops (refused) and the arm is held against gravity. 20× the
             motion's speed, between what a stick-slip jump reaches and a runaway: a light
             wrist joint breaking out of stiction jumps for some 50 ms and a few tens of mrad,
-            up to 0.94 rad/s on the YuMi plants of seeds 1–32 of
-            ``benchmarks/guiding_quality.py`` (dry #1's joint 6; 1.0–1.2 rad/s on wider
+            up to 1.35 rad/s on the dry YuMi plants of seeds 1–32 of
+            ``benchmarks/guiding_quality.py`` with two periods of delay (0.94 with the 6 Hz
+            loop of before; ``calibration_accuracy.py --seeds 32 --delay 2``; 1.0–1.2 rad/s,
+            measured with that loop, on wider
             families: stiction up to 2×, three periods of delay, levels ±25 % along the
             travel), while the Panda's runaway went 2.8 → 6.5 rad/s within 32 ms. At 1 rad/s
             (before) dry #1 was 6 % from a refused calibration, and refused on the wider
@@ -192,7 +195,7 @@ class CalibrationParameters:
             ran away 112 mrad when released.
         friction_accuracy: Relative error of a measured Coulomb level away from the
             calibration pose and speed [–]: what the controller assumes of the friction of
-            the joints that slid. A 15 mrad stroke sees neither the position
+            the joints that slid. The stroke (10 mrad when measured) sees neither the position
             dependence (±15 % on the plants of ``benchmarks/guiding_quality.py``) nor the
             Stribeck curve: with 0.1 released arms crept up to 349 mrad there, with 0.2
             at most 21 mrad.
@@ -215,13 +218,13 @@ class CalibrationParameters:
     cycles: int = 2
     settle_time: float = 0.1
     bandwidth: float = 4.0
-    slow_rate_damping: float = 0.14
     max_speed: float = 2.0
     max_payload: float | None = None
     max_friction_change: float = 0.85
     friction_accuracy: float = 0.2
     max_torque_offset: float = 0.05
     level_slope: float | None = 0.3
+    slow_rate_damping: float = 0.14
 
     def __post_init__(self) -> None:
         names = ("stroke", "speed", "bandwidth", "slow_rate_damping", "max_speed",
@@ -256,10 +259,11 @@ class CalibrationParameters:
         ``slow_rate_damping``: 4 Hz → 3.95 Hz at 125 Hz, 3.41 Hz at 100 Hz), and the
         stroke grows by as much, so that the motion stays as slow beside its loop (the run
         1.3 s at 250 Hz, 1.3 s at 125 Hz, 1.5 s at 100 Hz) and the 4-stroke check as far
-        from the stick-slip jumps a slower loop lets a light joint make. With 6 Hz and 10
-        mrad at 125 Hz, 5 of the 8 plants of seeds 1–4 were refused (joints 42–48 mrad
-        off, one at 2.1 rad/s); with 3.96 Hz alone, 2 of 16 at 100 Hz (40–41 mrad); with
-        both, none of 16 at 125 or 100 Hz.
+        from the stick-slip jumps a slower loop lets a light joint make. Measured with the
+        6 Hz ceiling of before: with 6 Hz and 10 mrad at 125 Hz, 5 of the 8 plants of
+        seeds 1–4 were refused (joints 42–48 mrad off, one at 2.1 rad/s); with the
+        bandwidth lowered but the stroke kept at 10 mrad, 2 of 16 at 100 Hz (40–41 mrad);
+        with both, none of 16 at 125 or 100 Hz.
         """
         bandwidth = period_bandwidth(self.bandwidth, dt, calibration_gains,
                                      damping=self.slow_rate_damping)  # fmt: skip
@@ -312,9 +316,11 @@ class Calibration:
             its level), and reads the dry plants' levels 0.8 % off in the median and at
             most 5 % (``calibration_accuracy.py``, seeds 1–16; a stretch starts on the
             Stribeck curve, so mostly high): the stiction margin's 5 %, the least error of
-            any level, bounds them at the pose. On the Panda's, whose tracking rings,
-            stretches disagree by up to ±25 % of a shoulder's level and the levels come out
-            up to 14 % off. None: not known (0).
+            any level, bounds them at the pose. On the Panda's, whose 6 Hz tracking rang,
+            stretches disagreed by up to ±25 % of a shoulder's level and the levels came out
+            up to 14 % off (with two periods of delay up to 71 %; at 4 Hz within 8.8 %,
+            ``calibration_accuracy.py --robot panda --seeds 16 --delay 2``). None: not
+            known (0).
     """
 
     pose: FloatArray
@@ -363,9 +369,11 @@ class Calibration:
         faster than ``max_speed`` or more than four strokes off its motion under the
         calibration's own feed-forward (the model's friction among it; or a hand: the two
         cannot be told apart) counts as read at 0: none of its model's level is sure (error
-        1: no compensation, the whole level as margin). On dry #1 of a family whose levels
-        are 0.5–1.5 of the model's (its wrist 0.52×), the wrist jumped at 2.01 rad/s under
-        the 6 Hz loop of before, and ran 60 mrad off the motion under the 4 Hz one; guided
+        1: no compensation, the whole level as margin; a hand on the arm during the
+        calibration costs that joint its compensation until the next one). On dry #1 of a
+        family whose levels are 0.5–1.5 of the model's (its wrist 0.52×), the wrist jumped
+        at 2.01 rad/s under the 6 Hz loop of before, and ran more than 60 mrad off the
+        motion under the 4 Hz one; guided
         with the model's level and error, the released arm ran 1.25 rad (passive 3.1 rad).
         """
         if self.measured is None:
@@ -473,6 +481,26 @@ def implausible_friction(scale: FloatArray, max_change: float) -> NDArray[np.boo
     """
     limit = 1.0 + max_change
     return (scale > limit) | (scale < 1.0 / limit)
+
+
+def gravity_share(bias: FloatArray, gravity: FloatArray, limit: float) -> FloatArray:
+    """Per joint, the relative error of G that explains a gravity error read at a pose [–].
+
+    ``bias`` = ``G_model − G_true`` and ``gravity`` = ``G_model`` at the calibration pose
+    [Nm]. A drive that applies ``g`` times what it is told scales a joint's gravity torque
+    rather than shifts it: the part of ``bias`` up to ``limit`` times ``|G|`` (the drives'
+    gain tolerance, ``LeadThroughParameters.drive_gain_uncertainty``) is taken as ``k G``,
+    which follows G away from the pose, and only the rest as a constant. A mass off does not
+    scale each joint's G alike, so its share stays constant: with the masses' 5 % in the
+    limit too (15 %), a mass error read on a wrist joint holding 0.4 Nm was taken as 14 % of
+    its G, and a released arm with masses ±10 % coasted 0.56 s. A drive gain of 1.09 on
+    a shoulder holding 5 Nm at the pose reads a bias of 0.4 Nm there, but is 0.03 Nm off
+    where the shoulder holds 0.3 Nm: kept constant, the difference read as a push that ran a
+    released arm on for 0.67 s (dry #59 stiff upwards of ``benchmarks/guiding_quality.py``).
+    """
+    with np.errstate(divide="ignore", invalid="ignore"):
+        share = np.where(gravity != 0.0, bias / gravity, 0.0)
+    return np.clip(share, -limit, limit)
 
 
 #: The calibration's tracking gains per unit of M(q) for a bandwidth ω [rad/s]: stiffness

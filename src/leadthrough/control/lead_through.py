@@ -40,7 +40,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from leadthrough.compiled import kernel
 from leadthrough.control.active_law import ActiveLaw
-from leadthrough.control.calibration import Calibration, CalibrationParameters, CalibrationRun
+from leadthrough.control.calibration import (
+    Calibration,
+    CalibrationParameters,
+    CalibrationRun,
+    gravity_share,
+)
 from leadthrough.control.constraints import VirtualConstraint, constraint_torque
 from leadthrough.control.feedforward import DelayLine, FeedForwardTorques, PassiveFeedForward
 from leadthrough.control.parameters import LeadThroughParameters, Mode
@@ -241,16 +246,29 @@ class LeadThrough:
 
     @property
     def gravity_correction(self) -> FloatArray:
-        """What the start-up calibration added to the model's G(q) [Nm] (zeros without one).
+        """What the start-up calibration added to the model's G at its pose [Nm] (zeros without).
 
-        The gravity error it measured at its pose (after the payload), ``−bias`` there:
-        feed-forward, observer and supervisor then hold the arm with the corrected model,
-        and away from that pose the model may be off by ``parameters.gravity_uncertainty``
+        The gravity error it measured there (after the payload), ``−bias``: feed-forward,
+        observer and supervisor then hold the arm with the corrected model, whose
+        correction follows G away from the pose as far as :attr:`gravity_share` explains
+        it; there the model may be off by ``parameters.gravity_uncertainty``
         times the change of G (the Coulomb compensation's ceiling); on a joint stiction kept
         the calibration from measuring, by that times all of G, as without a calibration.
         """
-        correction = self._gravity_correction
-        return np.zeros(self.robot.n_joints) if correction is None else correction.copy()
+        if self.calibration is None or self._gravity_correction is None:
+            return np.zeros(self.robot.n_joints)
+        return -np.asarray(self.calibration.bias, dtype=float)
+
+    @property
+    def gravity_share(self) -> FloatArray:
+        """The part of the calibration's gravity error taken as a relative error of G [–].
+
+        ``k`` per joint (:func:`~leadthrough.control.calibration.gravity_share`, zeros
+        without a calibration): the model holds the arm with ``(1 − k) G(q) − c``, equal
+        to ``G − bias`` at the calibration pose, ``k G`` following G away from it.
+        """
+        scale = self._gravity_scale
+        return np.zeros(self.robot.n_joints) if scale is None else 1.0 - scale
 
     @property
     def torque_offset(self) -> FloatArray:
@@ -312,6 +330,7 @@ class LeadThrough:
         self.last_feed_forward: FeedForwardTorques | None = None
         self.calibration: Calibration | None = None
         self._gravity_correction: FloatArray | None = None  # [Nm], added to G(q)
+        self._gravity_scale: FloatArray | None = None  # [–], G(q) multiplied by it first
         #: The measurement's offset the calibration read, taken off every later measured
         #: torque [Nm] (None: not read)
         self._torque_offset: FloatArray | None = None
@@ -393,8 +412,10 @@ class LeadThrough:
         try:
             self._stage = "model"
             self.model = model = self.dynamics.snapshot(q, qd)
-            if self._gravity_correction is not None:  # the calibration's, see gravity_correction
-                np.add(model.gravity, self._gravity_correction, out=model.gravity)
+            correction, scale = self._gravity_correction, self._gravity_scale
+            if correction is not None and scale is not None:  # see gravity_correction
+                np.multiply(model.gravity, scale, out=model.gravity)
+                np.add(model.gravity, correction, out=model.gravity)
             tau = None if tau_measured is None else np.asarray(tau_measured, dtype=float)
             if self._calibrating:
                 desired, dither = self._calibrate(t, model, tau), np.zeros(self.robot.n_joints)
@@ -491,11 +512,17 @@ class LeadThrough:
             self.parameters.calibration.level_slope,  # type: ignore[union-attr]
             self.parameters.stiction_margin)  # fmt: skip
         # the gravity error measured at the pose goes into the model, as the payload does:
-        # feed-forward, observer and supervisor all hold the arm with G(q) − bias
-        self._gravity_correction = -np.asarray(calibration.bias, dtype=float)
+        # feed-forward, observer and supervisor all hold the arm with G(q) − bias(q), the
+        # bias a relative error of G as far as it can be (it follows G), the rest constant
+        bias = np.asarray(calibration.bias, dtype=float)
+        gravity = self.dynamics.gravity(calibration.pose)
+        share = gravity_share(bias, gravity, self.parameters.drive_gain_uncertainty)
+        share = np.where(known, share, 0.0)
+        self._gravity_scale = 1.0 - share
+        self._gravity_correction = share * gravity - bias
         # where the gravity is known: at the pose on the joints measured (reference 0
         # elsewhere)
-        measured_gravity = self.dynamics.gravity(calibration.pose) - calibration.bias
+        measured_gravity = gravity - bias
         self._gravity_reference = np.where(known, measured_gravity, 0.0)
         self.law.model_error.calibrate(np.zeros(self.robot.n_joints), self._gravity_reference)
 

@@ -34,7 +34,7 @@ from leadthrough.model.description import FloatArray
 from leadthrough.model.dynamics import Dynamics
 
 #: Control period at which the tracking bandwidths were chosen and verified on the plant
-#: family of ``benchmarks/guiding_quality.py`` (the calibration's 6 Hz, the replay's) [s].
+#: family of ``benchmarks/guiding_quality.py`` (the calibration's and the replay's 4 Hz) [s].
 VERIFIED_PERIOD = 0.004
 #: Periods between a sample and the command it gives reaching the drive, in the loop model
 #: of :func:`loop_damping` [–] (the plant family's delays are 1–2 periods).
@@ -119,10 +119,10 @@ def period_bandwidth(
     ``ceiling`` [Hz] at :data:`VERIFIED_PERIOD` or faster; at a slower rate, the largest
     bandwidth up to it whose :func:`loop_damping` (one period of delay) is no less than
     ``damping`` [–], by default the ceiling's at :data:`VERIFIED_PERIOD` (at 125 Hz, 6 Hz →
-    3.92 Hz for a PD with ζ = 1, 3.96 Hz with the calibration's integral), or, where no
-    bandwidth down to 2 % of the ceiling keeps that much at ``dt`` (a loop damped 0.7 at
-    250 Hz, an integral that takes damping at any bandwidth), no less than the most any of
-    them keeps.
+    3.92 Hz for a PD with ζ = 1; the start-up calibration asks for 0.14: 4 Hz → 3.95 Hz),
+    or, where no bandwidth down to 2 % of the ceiling keeps that much at ``dt`` (a loop
+    damped 0.7 at 250 Hz, an integral that takes damping at any bandwidth; a ``damping``
+    asked for above what any keeps), no less than the most any of them keeps.
     """
     if dt <= VERIFIED_PERIOD * (1.0 + 1e-6):  # a measured period's last digits change nothing
         return ceiling
