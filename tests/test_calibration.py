@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from as_found import SIX_HERTZ, built_as, slow_calibration_motion
+from as_found import SIX_HERTZ, six_hertz_calibration, slow_calibration_motion
 from leadthrough.control import calibration
 from leadthrough.control.calibration import (
     Calibration,
@@ -123,7 +123,7 @@ def test_friction_far_above_the_model_is_measured_not_refused(yumi, monkeypatch)
 
     default = calibrated()  # 4 Hz: accepted, joint 3 keeps the model's (lower) level
     assert default.accepted and not default.measured[2] and default.friction_scale[2] == 1.0
-    built_as(monkeypatch, CalibrationParameters(**SIX_HERTZ))
+    six_hertz_calibration(monkeypatch)
     result = calibrated()
     assert result.accepted, result.reason
     assert result.friction_scale[2] > 1.5
@@ -550,7 +550,7 @@ def test_a_level_read_far_below_the_model_refuses_the_calibration_and_widens_its
     assert "joint 5 was" in default.calibration.reason
     assert "off the calibration motion" in default.calibration.reason
     assert default.law.friction_error[4] == 1.0
-    built_as(monkeypatch, CalibrationParameters(**SIX_HERTZ))
+    six_hertz_calibration(monkeypatch)
     controller = LeadThrough(yumi, calibrate=True)
     simulate(DigitalTwin(yumi, plant.config), controller, controller.calibration_time + 0.05)
     result = controller.calibration
@@ -677,7 +677,7 @@ def test_at_125_hz_the_calibration_is_accepted_where_the_250_hz_settings_were_no
 
     assert calibrate().accepted
     monkeypatch.setattr(CalibrationParameters, "at_period", lambda self, dt: self)
-    built_as(monkeypatch, CalibrationParameters(**SIX_HERTZ))
+    six_hertz_calibration(monkeypatch)
     refused = calibrate()
     assert not refused.accepted and ("off the calibration motion" in refused.reason
                                      or "faster than" in refused.reason)  # fmt: skip
@@ -696,15 +696,8 @@ def test_at_250_hz_and_faster_the_loop_decays_with_two_periods_of_delay():
     assert loop_damping(calibration_gains(2.0 * np.pi * SIX_HERTZ["bandwidth"]), 0.004, 2) < 0.0
 
 
-def _panda() -> lt.RobotDescription:
-    """The shipped Panda description, without the warning of its assumed drive data."""
-    import warnings
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the Panda's assumed gear ratio: not what is tested
-        return lt.robots.panda()
-
-
+# the Panda's assumed gear ratio: not what is tested
+@pytest.mark.filterwarnings("ignore::leadthrough.model.robots.drive.AssumedDriveDataWarning")
 def test_a_panda_with_two_periods_of_delay_reads_its_levels_and_then_rests(monkeypatch):
     """Panda dry #4 of the guiding family, its delay two periods (8 ms at 250 Hz).
 
@@ -713,7 +706,7 @@ def test_a_panda_with_two_periods_of_delay_reads_its_levels_and_then_rests(monke
     motion's speed, read its level 1.7× the truth, and the arm it left guiding kept moving
     0.2–0.5 s after (0.056 rad/s): the 4 Hz loop slides every joint at the motion's pace.
     """
-    panda = _panda()
+    panda = lt.robots.panda()
     plant = sample_plant(panda, 4, "dry", PlantRanges(delay_periods=(2, 2)))
 
     def run() -> tuple[np.ndarray, float, float]:
@@ -735,7 +728,7 @@ def test_a_panda_with_two_periods_of_delay_reads_its_levels_and_then_rests(monke
     speed = CalibrationParameters().speed
     assert np.all(np.abs(levels - 1.0) < 0.1) and len(levels) == 7
     assert fastest < 2.0 * speed and resting < 0.01
-    built_as(monkeypatch, CalibrationParameters(**SIX_HERTZ))
+    six_hertz_calibration(monkeypatch)
     levels, fastest, resting = run()
     assert levels.max() > 1.4 and fastest > 2.0 * speed and resting > 0.03
 

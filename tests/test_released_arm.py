@@ -84,7 +84,7 @@ class _Uncorrected(LeadThrough):
         if calibration.accepted:
             gravity = self.dynamics.gravity(calibration.pose)
             self.law.model_error.calibrate(calibration.bias, gravity)
-            self._gravity_correction = None
+            self._gravity_offset = None
 
 
 def _passive(cls=LeadThrough, calibrate=True, **changes):

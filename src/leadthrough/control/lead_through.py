@@ -255,7 +255,7 @@ class LeadThrough:
         times the change of G (the Coulomb compensation's ceiling); on a joint stiction kept
         the calibration from measuring, by that times all of G, as without a calibration.
         """
-        if self.calibration is None or self._gravity_correction is None:
+        if self.calibration is None or self._gravity_offset is None:
             return np.zeros(self.robot.n_joints)
         return -np.asarray(self.calibration.bias, dtype=float)
 
@@ -329,7 +329,7 @@ class LeadThrough:
         self.model: ModelSnapshot | None = None  # the model at the latest sample
         self.last_feed_forward: FeedForwardTorques | None = None
         self.calibration: Calibration | None = None
-        self._gravity_correction: FloatArray | None = None  # [Nm], added to G(q)
+        self._gravity_offset: FloatArray | None = None  # [Nm], added to scale · G(q)
         self._gravity_scale: FloatArray | None = None  # [–], G(q) multiplied by it first
         #: The measurement's offset the calibration read, taken off every later measured
         #: torque [Nm] (None: not read)
@@ -412,10 +412,10 @@ class LeadThrough:
         try:
             self._stage = "model"
             self.model = model = self.dynamics.snapshot(q, qd)
-            correction, scale = self._gravity_correction, self._gravity_scale
-            if correction is not None and scale is not None:  # see gravity_correction
-                np.multiply(model.gravity, scale, out=model.gravity)
-                np.add(model.gravity, correction, out=model.gravity)
+            gravity_offset, gravity_scale = self._gravity_offset, self._gravity_scale
+            if gravity_offset is not None and gravity_scale is not None:  # gravity_correction
+                np.multiply(model.gravity, gravity_scale, out=model.gravity)
+                np.add(model.gravity, gravity_offset, out=model.gravity)
             tau = None if tau_measured is None else np.asarray(tau_measured, dtype=float)
             if self._calibrating:
                 desired, dither = self._calibrate(t, model, tau), np.zeros(self.robot.n_joints)
@@ -519,7 +519,7 @@ class LeadThrough:
         share = gravity_share(bias, gravity, self.parameters.drive_gain_uncertainty)
         share = np.where(known, share, 0.0)
         self._gravity_scale = 1.0 - share
-        self._gravity_correction = share * gravity - bias
+        self._gravity_offset = share * gravity - bias
         # where the gravity is known: at the pose on the joints measured (reference 0
         # elsewhere)
         measured_gravity = gravity - bias
