@@ -249,17 +249,24 @@ def test_ctrl_c_during_teach_is_one_line_and_the_recording_is_complete(tmp_path,
         return step(self, state)
 
     out = tmp_path / "taught.mcap"
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(teach.RecordingController, "step", interrupted_step)
-        status = main(["teach", "--friction", str(friction), "--duration", "5", "--out",
-                       str(out)])  # fmt: skip
+    # Python's own Ctrl-C handler, as in a terminal, even where the test runs with SIGINT
+    # ignored (a background job inherits SIG_IGN, and Python then installs none)
+    inherited = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.MonkeyPatch.context() as patch:
+            patch.setattr(teach.RecordingController, "step", interrupted_step)
+            status = main(["teach", "--friction", str(friction), "--duration", "5", "--out",
+                           str(out)])  # fmt: skip
+        restored = signal.getsignal(signal.SIGINT)
+    finally:
+        signal.signal(signal.SIGINT, inherited)
     err = capsys.readouterr().err
     assert status == 130
     assert len(err.splitlines()) == 1 and "interrupted" in err and str(out) in err
     recording = read_recording(out)
     assert recording.complete and len(recording.t) in (50, 51)
     assert recording.events[-1].kind == "interrupted"
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # restored
+    assert restored is signal.default_int_handler  # teach put back the handler it found
 
 
 def test_closed_stdout_ends_quietly():

@@ -19,11 +19,14 @@ DT = 0.004  # control period [s], 250 Hz
 
 # Records synthetic states in real time and prints each recorded t once record() returned.
 CHILD = """
-import sys, time
+import signal, sys, time
 import numpy as np
 import leadthrough as lt
 from leadthrough.runtime.recording import SessionRecorder
 
+# Ctrl-C as a terminal delivers it, even when the test runs where SIGINT is ignored (a
+# background job inherits SIG_IGN, and Python then installs no handler of its own)
+signal.signal(signal.SIGINT, signal.default_int_handler)
 dt = float(sys.argv[2])
 with SessionRecorder(sys.argv[1], lt.robots.yumi(), {"dt": dt}) as recorder:
     for k in range(10**6):
@@ -151,13 +154,18 @@ def run_child_until(path: Path, t_stop: float, signal_number: int) -> tuple[floa
     lines: list[str] = []
     reader = threading.Thread(target=lambda: lines.extend(child.stdout), daemon=True)
     reader.start()
-    deadline = time.monotonic() + 120.0
-    while not (lines and float(lines[-1]) >= t_stop):
-        assert child.poll() is None, child.stderr.read()
-        assert time.monotonic() < deadline, "the child did not record in time"
-        time.sleep(0.01)
-    os.kill(child.pid, signal_number)
-    code = child.wait(timeout=30)
+    try:
+        deadline = time.monotonic() + 120.0
+        while not (lines and float(lines[-1]) >= t_stop):
+            assert child.poll() is None, child.stderr.read()
+            assert time.monotonic() < deadline, "the child did not record in time"
+            time.sleep(0.01)
+        os.kill(child.pid, signal_number)
+        code = child.wait(timeout=30)
+    finally:  # a child the signal did not stop must not record on after the test
+        if child.poll() is None:
+            child.kill()
+            child.wait()
     reader.join(timeout=10)
     child.stderr.close()
     complete = [line for line in lines if line.endswith("\n")]
