@@ -5,14 +5,18 @@ explicit (``DryFrictionParameters.level``, in the units of the measured torque: 
 the plant's drive gain), so each measured level can be compared with it. Usage::
 
     python benchmarks/calibration_accuracy.py [--seeds 8] [--stroke 0.005] [--speed 0.05]
-        [--bandwidth 6] [--delay 2] [--robot panda]
+        [--bandwidth 6] [--delay 2] [--robot panda] [--dt 0.008] [--no-predict]
 
 Prints each plant's relative errors per joint [%] (blank: the joint did not slide both
 ways and kept its model), the fastest joint during the calibration and the fastest 0.2–0.5
 s after it (the arm left to the controller, nobody touching) [rad/s], then the median, 90th
 percentile and largest |error|. ``--delay N`` gives every plant N periods of delay (the
 family: 1–2); ``--bandwidth`` the calibration's tracking at 250 Hz (the default 4 Hz;
-the previous default was ``--bandwidth 6 --stroke 0.01``).
+the previous default was ``--bandwidth 6 --stroke 0.01``); ``--dt`` the control period of
+the plants and the controller (below 250 Hz the calibration's tracking follows it,
+``CalibrationParameters.at_period``, and the joints whose loop would grow with two periods
+of delay track the state predicted for when their command acts,
+``CalibrationParameters.predict``); ``--no-predict`` tracks the samples on every joint.
 """
 
 from __future__ import annotations
@@ -57,12 +61,14 @@ def calibrate(
     seed: int,
     calibration: CalibrationParameters,
     ranges: PlantRanges | None = None,
+    dt: float = 0.004,
 ) -> CalibrationFigures:
-    """The default active controller with ``calibration`` on dry plant ``seed``."""
+    """The default active controller with ``calibration`` on dry plant ``seed``, at ``dt``."""
     plant = sample_plant(robot, seed, "dry", ranges)
     parameters = dataclasses.replace(lt.LeadThroughParameters(), calibration=calibration)
-    controller = lt.LeadThrough(robot, mode="active", parameters=parameters, calibrate=True)
-    twin = DigitalTwin(robot, plant.config)
+    controller = lt.LeadThrough(robot, mode="active", dt=dt, parameters=parameters,
+                                calibrate=True)  # fmt: skip
+    twin = DigitalTwin(robot, dataclasses.replace(plant.config, control_dt=dt))
     end = controller.calibration_time
     sim = simulate(twin, controller, end + REST_WINDOW[1], progress=False)
     speed = np.abs(sim.qd_true)
@@ -88,20 +94,26 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--speed", type=float, default=CalibrationParameters.speed)
     parser.add_argument("--bandwidth", type=float, default=CalibrationParameters.bandwidth)
     parser.add_argument("--delay", type=int, help="periods of delay of every plant")
+    parser.add_argument("--dt", type=float, default=0.004, help="control period [s]")
+    parser.add_argument("--no-predict", dest="predict", action="store_false",
+                        help="track the samples, not the predicted state")  # fmt: skip
     add_robot_arguments(parser)
     args = parser.parse_args(argv)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", lt.robots.AssumedDriveDataWarning)
         robot = robot_from(args)
     calibration = CalibrationParameters(stroke=args.stroke, speed=args.speed,
-                                        bandwidth=args.bandwidth)  # fmt: skip
+                                        bandwidth=args.bandwidth,
+                                        predict="needed" if args.predict else "never")  # fmt: skip
     ranges = None if args.delay is None else PlantRanges(delay_periods=(args.delay, args.delay))
-    print(f"{robot.name}: stroke {1e3 * args.stroke:g} mrad at {args.speed:g} rad/s, "
-          f"{args.bandwidth:g} Hz; error per joint [%], fastest joint during | after "
-          "[rad/s]")  # fmt: skip
+    tracking = calibration.at_period(args.dt)
+    print(f"{robot.name} at {1 / args.dt:g} Hz: stroke {1e3 * tracking.stroke:.3g} mrad at "
+          f"{tracking.speed:g} rad/s, {tracking.bandwidth:.3g} Hz"
+          f"{'' if args.predict else ', the samples tracked'}; error per joint [%], "
+          "fastest joint during | after [rad/s]")  # fmt: skip
     figures = []
     for seed in range(1, args.seeds + 1):
-        one = calibrate(robot, seed, calibration, ranges)
+        one = calibrate(robot, seed, calibration, ranges, args.dt)
         figures.append(one)
         cells = " ".join("    " if np.isnan(e) else f"{100 * e:+4.0f}" for e in one.errors)
         refused = "" if one.accepted else "  refused"

@@ -15,10 +15,11 @@ from leadthrough.friction.compensation import CoulombCompensationParameters
 #: outside 1 / 1.75–1.75× the model's, and a level read known to ``friction_accuracy``
 #: everywhere, its pose included.
 SLOW = {"stroke": 0.005, "speed": 0.05, "max_friction_change": 0.75, "level_slope": None,
-        "bandwidth": 6.0}  # fmt: skip
+        "bandwidth": 6.0, "predict": "never"}  # fmt: skip
 #: Before: a 6 Hz loop and a 10 mrad stroke at 250 Hz, a loop that grows with two periods
-#: of delay (``CalibrationParameters.bandwidth``).
-SIX_HERTZ = {"stroke": 0.01, "bandwidth": 6.0}
+#: of delay (``CalibrationParameters.bandwidth``), tracking the samples (today's default
+#: would predict there, ``CalibrationParameters.predict``).
+SIX_HERTZ = {"stroke": 0.01, "bandwidth": 6.0, "predict": "never"}
 
 
 def slow_calibration_motion(monkeypatch) -> None:

@@ -95,7 +95,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from leadthrough.control.tracking import pd_gains, period_bandwidth
+from leadthrough.control.tracking import (
+    LONGEST_DELAY,
+    VERIFIED_PERIOD,
+    loop_damping,
+    pd_gains,
+    period_bandwidth,
+    predicted_state,
+)
 from leadthrough.errors import ParameterError
 from leadthrough.estimation.momentum_balance import MomentumBalance, stretch_readings
 from leadthrough.friction.measured_level import MeasuredLevelError
@@ -135,6 +142,8 @@ _DISTURBED = 4.0
 #: someone leaning on it by up to ~80 N is read as a payload; set ``max_payload`` to the
 #: rated payload where it is known.
 PAYLOAD_SHARE = 0.5
+#: ``CalibrationParameters.predict``'s settings.
+PREDICTIONS = ("needed", "always", "never")
 
 
 @dataclass(frozen=True)
@@ -160,8 +169,9 @@ class CalibrationParameters:
             period of delay, below 250 Hz [–] (:meth:`at_period`). 0.14 is what the 6 Hz
             loop had at 250 Hz (0.138), the stiffest the YuMi plants' wrists were seen to
             need there: at 125 and 100 Hz (3.95 and 3.41 Hz) every plant of seeds 1–8 (125
-            Hz) and 1–4 (100 Hz) calibrates, while the loop grows with two periods of delay
-            (ζ −0.07 and −0.08). One that decays with two (what 0.36 gives: 2.8 and 2.44 Hz,
+            Hz) and 1–4 (100 Hz) calibrated tracking the samples, a loop that grows with two
+            periods of delay (ζ −0.07 and −0.08; ``predict`` makes it decay). One that
+            decays with two unpredicted (what 0.36 gives: 2.8 and 2.44 Hz,
             the 4 Hz loop's margin at 250 Hz) lets stiction throw the wrist of dry #1 and #4
             four strokes off at 100 Hz (refused), and guides heavier at 125 Hz (seeds 1–4:
             effort 0.78 → 0.82).
@@ -211,6 +221,28 @@ class CalibrationParameters:
             the plant family's steepest (±15 %, two periods per turn); the real UR10e's
             levels change by at most 0.25 per radian over a stroke. None: the measured
             levels carry ``friction_accuracy`` everywhere, the pose included.
+        predict: Which joints track the state predicted for when their command acts, one
+            period after its sample (:func:`~leadthrough.control.tracking.predicted_state`),
+            instead of the sample: ``"needed"`` (the default), each joint whose loop,
+            linearised with two periods of delay (the plant family's longest) and damped by
+            the joint's own viscous friction (the model's, per unit of its inertia at the
+            pose), would grow (:attr:`CalibrationRun.predicted`); ``"always"``, every joint;
+            ``"never"``, none. Predicted, a loop that grows with two periods at 125 and 100
+            Hz decays (ζ −0.07 and −0.08 → 0.10 and 0.11 without viscous friction). The
+            prediction takes the command's acceleration for the arm's, which a load or a
+            stick-slip jump the model lacks makes wrong until the loop catches up, so it is
+            kept to the joints that need it: needed, no joint at 250 Hz and faster, every
+            joint of the Panda (its viscous friction a hundredth of its inertia's) and the
+            YuMi's joints 1–3 and 7 at 125 and 100 Hz. At 125 Hz on every joint the YuMi's
+            light wrist, whose own friction damps its loop, jumped four strokes off on 2 of
+            16 plants (refused), and seeds 1–4 of ``benchmarks/guiding_quality.py`` guided
+            with 2 of 8 plants uncalibrated (vibration 1.51× passive); at 250 Hz on every
+            joint, seeds 5–8 guided 0.03 heavier. At 125 Hz
+            (``benchmarks/calibration_accuracy.py --robot panda --seeds 16 --dt 0.008
+            [--no-predict]``) tracking the samples refused a Panda's calibration on 6 of 16
+            plants, a joint at up to 2.8 rad/s, and left the arm moving at up to 0.34 rad/s;
+            as needed, none refused, every level within 11 %, the arm at rest, and the
+            YuMi's 16 plants calibrate as before (none refused, levels within 3.9 %).
     """
 
     stroke: float = 0.015
@@ -225,6 +257,7 @@ class CalibrationParameters:
     max_torque_offset: float = 0.05
     level_slope: float | None = 0.3
     slow_rate_damping: float = 0.14
+    predict: str = "needed"
 
     def __post_init__(self) -> None:
         names = ("stroke", "speed", "bandwidth", "slow_rate_damping", "max_speed",
@@ -236,6 +269,9 @@ class CalibrationParameters:
         real("settle_time", self.settle_time, minimum=0.0, error=ParameterError)
         if self.level_slope is not None:
             real("level_slope", self.level_slope, minimum=0.0, error=ParameterError)
+        if self.predict not in PREDICTIONS:
+            raise ParameterError("predict", f"must be one of {', '.join(PREDICTIONS)}, got "
+                                 f"{self.predict!r}")  # fmt: skip
         if not isinstance(self.cycles, int) or self.cycles < 1:
             raise ParameterError("cycles", f"must be a whole number >= 1, got {self.cycles!r}")
         if self.max_speed <= self.speed:
@@ -267,10 +303,11 @@ class CalibrationParameters:
         """
         bandwidth = period_bandwidth(self.bandwidth, dt, calibration_gains,
                                      damping=self.slow_rate_damping)  # fmt: skip
-        if bandwidth == self.bandwidth:
-            return self
-        return dataclasses.replace(self, bandwidth=bandwidth,
-                                   stroke=self.stroke * self.bandwidth / bandwidth)  # fmt: skip
+        stroke = self.stroke * self.bandwidth / bandwidth
+        settings = self  # itself where nothing changes
+        if bandwidth != self.bandwidth:
+            settings = dataclasses.replace(self, bandwidth=bandwidth, stroke=stroke)
+        return settings
 
     @property
     def frequency(self) -> float:
@@ -529,6 +566,7 @@ class CalibrationRun:
         pose: ArrayLike,
         parameters: CalibrationParameters | None = None,
         gravity_uncertainty: float = 0.15,
+        dt: float = VERIFIED_PERIOD,
     ) -> None:
         self.parameters = parameters or CalibrationParameters()
         self.dynamics, self.friction = dynamics, friction
@@ -538,8 +576,12 @@ class CalibrationRun:
         # move into the side with more room (a joint resting near a limit moves away from it)
         self._direction = np.where(high - self.pose >= self.pose - low, 1.0, -1.0)
         self._gains = calibration_gains(2.0 * np.pi * self.parameters.bandwidth)
+        #: the joints whose tracking takes the state predicted for when a command acts
+        self.predicted = self._predicted_joints(dynamics, friction, dt)
         self._error_integral = np.zeros_like(self.pose)
         self._last_t = 0.0
+        # the acceleration the last command asked for, its integral's share left out [rad/s²]
+        self._accelerating = np.zeros_like(self.pose)
         self.disturbance: str | None = None  # why the calibration must stop, if it must
         # the joint that ran faster than max_speed or too far off the motion, if one
         self.runaway: int | None = None
@@ -552,24 +594,53 @@ class CalibrationRun:
         """Length of the calibration [s]."""
         return self.parameters.duration
 
+    def _predicted_joints(
+        self, dynamics: Dynamics, friction: FrictionModel, dt: float
+    ) -> NDArray[np.bool_]:
+        """``predict`` per joint: ``"needed"``, where the joint's loop would grow.
+
+        Linearised with two periods of delay (:data:`~leadthrough.control.tracking.
+        LONGEST_DELAY`) at the period ``dt`` [s], and with the joint's own viscous friction
+        per unit of its inertia at the pose, which damps it (:func:`~leadthrough.control.
+        tracking.loop_damping`).
+        """
+        n = self.pose.size
+        if self.parameters.predict != "needed":
+            return np.full(n, self.parameters.predict == "always")
+        damping = friction.viscous / np.diag(dynamics.mass(self.pose))  # [1/s]
+        return np.array([loop_damping(self._gains, dt, LONGEST_DELAY, viscous=float(b)) < 0.0
+                         for b in damping])  # fmt: skip
+
     def command(self, t: float, q: FloatArray, qd: FloatArray) -> FloatArray:
         """Torque [Nm] tracking the calibration motion at time ``t`` [s] from its start."""
+        self._check(q, qd, self._reference(t)[0])
+        period = max(t - self._last_t, 0.0)  # the robot's own, sample to sample
+        self._last_t = t
+        q_ref, qd_ref, qdd_ref = self._reference(t)
+        if self.predicted.any():  # where those joints will be when the command acts
+            ahead, speed = predicted_state(q, qd, self._accelerating, period)
+            q, qd = np.where(self.predicted, ahead, q), np.where(self.predicted, speed, qd)
+            now, later = (q_ref, qd_ref, qdd_ref), self._reference(t + period)
+            q_ref, qd_ref, qdd_ref = (np.where(self.predicted, b, a)
+                                      for a, b in zip(now, later, strict=True))  # fmt: skip
+        error = q_ref - q
+        self._error_integral += error * period
+        stiffness, damping, integral = self._gains
+        # the integral holds what the model lacks (a payload): it accelerates nothing
+        self._accelerating = qdd_ref + stiffness * error + damping * (qd_ref - qd)
+        wanted = self._accelerating + integral * self._error_integral
+        friction = self.friction.mean(qd_ref, q_ref)
+        return self.dynamics.gravity(q) + self.dynamics.mass(q) @ wanted + friction
+
+    def _reference(self, t: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The motion at ``t`` [s] from the start: q_ref [rad], q̇_ref [rad/s], q̈_ref [rad/s²]."""
         p = self.parameters
         moving = max(t - p.settle_time, 0.0)
         offset, velocity, acceleration = triangular_velocity(moving, p.speed, p.frequency)
         if t < p.settle_time:
             velocity = acceleration = np.zeros_like(velocity)
         d = self._direction
-        q_ref, qd_ref = self.pose + d * offset, d * velocity
-        self._check(q, qd, q_ref)
-        error = q_ref - q
-        self._error_integral += error * max(t - self._last_t, 0.0)
-        self._last_t = t
-        stiffness, damping, integral = self._gains
-        wanted = (d * acceleration + stiffness * error + damping * (qd_ref - qd)
-                  + integral * self._error_integral)  # fmt: skip
-        friction = self.friction.mean(qd_ref, q_ref)
-        return self.dynamics.gravity(q) + self.dynamics.mass(q) @ wanted + friction
+        return self.pose + d * offset, d * velocity, d * acceleration
 
     def _check(self, q: FloatArray, qd: FloatArray, q_ref: FloatArray) -> None:
         """Note the first disturbance: a joint too fast, or too far off the motion."""

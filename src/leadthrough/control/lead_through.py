@@ -465,7 +465,8 @@ class LeadThrough:
         if self._calibration_run is None:
             self._calibration_run = CalibrationRun(self.dynamics, self.friction, q,
                                                    self.calibration_parameters,
-                                                   self.parameters.gravity_uncertainty)  # fmt: skip
+                                                   self.parameters.gravity_uncertainty,
+                                                   self.dt)  # fmt: skip
             self._calibration_start = t
         run, elapsed = self._calibration_run, t - self._calibration_start
         applied, _ = self._measured(tau_measured)

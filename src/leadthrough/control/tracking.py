@@ -39,6 +39,9 @@ VERIFIED_PERIOD = 0.004
 #: Periods between a sample and the command it gives reaching the drive, in the loop model
 #: of :func:`loop_damping` [–] (the plant family's delays are 1–2 periods).
 LOOP_DELAY = 1
+#: The plant family's longest delay [periods]: a loop that must not grow on any of its
+#: plants must decay with it.
+LONGEST_DELAY = 2
 #: Cut-off of the low-pass the loop model assumes in the robot's joint velocity [Hz]: the
 #: slowest of the plant family (15–40 Hz, a differenced encoder filtered).
 VELOCITY_CUTOFF = 15.0
@@ -64,27 +67,47 @@ def pd_gains(damping_ratio: float = 1.0, integral_share: float = 0.0) -> LoopGai
     return gains
 
 
+def predicted_state(
+    q: FloatArray, qd: FloatArray, acceleration: FloatArray, period: float
+) -> tuple[FloatArray, FloatArray]:
+    """The joint state one ``period`` [s] ahead, under the last acceleration commanded.
+
+    A command computed from a sample acts one period later (:data:`LOOP_DELAY`), when the
+    arm has moved on under the command before it: tracking the state predicted for then
+    (``q + T q̇ + T² a / 2``, ``q̇ + T a``, with ``a`` the acceleration [rad/s²] the previous
+    command asked of computed torque, less an integral's share, which holds a load the
+    model lacks and accelerates nothing) instead of the sample takes that period out of
+    the loop. What the prediction does not know (a second period of delay, the robot's
+    velocity filter, friction the model lacks) the loop's margin must still cover.
+    """
+    return q + period * (qd + 0.5 * period * acceleration), qd + period * acceleration
+
+
 def loop_damping(
     gains: tuple[float, float, float],
     dt: float,
     delay: int = LOOP_DELAY,
     velocity_cutoff: float = VELOCITY_CUTOFF,
+    predicted: bool = False,
+    viscous: float = 0.0,
 ) -> float:
     """Least damping ratio of one joint's tracking loop, linearised [–] (< 0: it grows).
 
     Per unit inertia (computed torque leaves each mode a double integrator): the
     controller samples the position and a velocity low-passed at ``velocity_cutoff``
     [Hz], commands ``K_P e − K_D v + K_I ∫e`` (``gains``, per unit inertia), and the
-    command acts ``delay`` periods later, held over a period ``dt`` [s]. Each eigenvalue
-    λ of the map over one period is a mode ``s = ln(λ) / dt`` of damping ratio
-    ``−Re(s) / |s|``.
+    command acts ``delay`` periods later, held over a period ``dt`` [s]. ``predicted``:
+    ``e`` and ``v`` are taken one period ahead (:func:`predicted_state`, the filtered
+    velocity standing for the joint's). ``viscous`` [1/s]: the joint's own viscous friction
+    per unit inertia, ``b / m_ii``, which damps the arm. Each eigenvalue λ of the map over
+    one period is a mode ``s = ln(λ) / dt`` of damping ratio ``−Re(s) / |s|``.
     """
     from scipy.linalg import expm  # not at import: ``import leadthrough`` stays light
 
     stiffness, damping, integral = gains
     cutoff = 2.0 * np.pi * velocity_cutoff
     arm = np.array([[0.0, 1.0, 0.0, 0.0],  # q, q̇, the filtered velocity, and the torque
-                    [0.0, 0.0, 0.0, 1.0],
+                    [0.0, -viscous, 0.0, 1.0],
                     [0.0, cutoff, -cutoff, 0.0],
                     [0.0, 0.0, 0.0, 0.0]])  # fmt: skip
     held = expm(arm * dt)[:3]  # over one period, the torque held
@@ -92,9 +115,13 @@ def loop_damping(
 
     def step(x: FloatArray) -> FloatArray:
         q, qd, v = x[:3]
-        accumulated = x[3] - dt * q if has_integral else 0.0  # ∫e, e = −q
         queue = list(x[3 + has_integral :])
-        queue.append(-stiffness * q - damping * v + integral * accumulated)
+        tracked, velocity = q, v  # what the command acts on
+        if predicted:  # the newest command in the queue, less its integral (x[3] then)
+            acceleration = queue[-1] - (integral * x[3] if has_integral else 0.0)
+            tracked, velocity = predicted_state(q, v, acceleration, dt)
+        accumulated = x[3] - dt * tracked if has_integral else 0.0  # ∫e, e = −q
+        queue.append(-stiffness * tracked - damping * velocity + integral * accumulated)
         moved = held @ np.array([q, qd, v, queue.pop(0)])
         return np.array([*moved, *([accumulated] if has_integral else []), *queue])
 
