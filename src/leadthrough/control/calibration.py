@@ -303,11 +303,10 @@ class CalibrationParameters:
         """
         bandwidth = period_bandwidth(self.bandwidth, dt, calibration_gains,
                                      damping=self.slow_rate_damping)  # fmt: skip
-        stroke = self.stroke * self.bandwidth / bandwidth
-        settings = self  # itself where nothing changes
-        if bandwidth != self.bandwidth:
-            settings = dataclasses.replace(self, bandwidth=bandwidth, stroke=stroke)
-        return settings
+        if bandwidth == self.bandwidth:
+            return self
+        return dataclasses.replace(self, bandwidth=bandwidth,
+                                   stroke=self.stroke * self.bandwidth / bandwidth)  # fmt: skip
 
     @property
     def frequency(self) -> float:
