@@ -5,7 +5,7 @@ explicit (``DryFrictionParameters.level``, in the units of the measured torque: 
 the plant's drive gain), so each measured level can be compared with it. Usage::
 
     python benchmarks/calibration_accuracy.py [--seeds 8] [--stroke 0.005] [--speed 0.05]
-        [--bandwidth 6] [--delay 2] [--robot panda] [--dt 0.008] [--no-predict]
+        [--bandwidth 6] [--delay 2] [--robot panda] [--dt 0.008] [--predict never]
 
 Prints each plant's relative errors per joint [%] (blank: the joint did not slide both
 ways and kept its model), the fastest joint during the calibration and the fastest 0.2–0.5
@@ -16,7 +16,8 @@ the previous default was ``--bandwidth 6 --stroke 0.01``); ``--dt`` the control 
 the plants and the controller (below 250 Hz the calibration's tracking follows it,
 ``CalibrationParameters.at_period``, and the joints whose loop would grow with two periods
 of delay track the state predicted for when their command acts,
-``CalibrationParameters.predict``); ``--no-predict`` tracks the samples on every joint.
+``CalibrationParameters.predict``); ``--predict never`` tracks the samples on every joint,
+``--predict always`` the predicted state on every joint.
 """
 
 from __future__ import annotations
@@ -29,7 +30,8 @@ import numpy as np
 
 import leadthrough as lt
 from leadthrough.cli.arguments import add_robot_arguments, robot_from
-from leadthrough.control.calibration import CalibrationParameters
+from leadthrough.control.calibration import PREDICTIONS, CalibrationParameters
+from leadthrough.control.tracking import VERIFIED_PERIOD
 from leadthrough.twin.plants import PlantRanges, sample_plant
 from leadthrough.twin.runner import simulate
 from leadthrough.twin.simulator import DigitalTwin
@@ -61,7 +63,7 @@ def calibrate(
     seed: int,
     calibration: CalibrationParameters,
     ranges: PlantRanges | None = None,
-    dt: float = 0.004,
+    dt: float = VERIFIED_PERIOD,
 ) -> CalibrationFigures:
     """The default active controller with ``calibration`` on dry plant ``seed``, at ``dt``."""
     plant = sample_plant(robot, seed, "dry", ranges)
@@ -94,9 +96,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--speed", type=float, default=CalibrationParameters.speed)
     parser.add_argument("--bandwidth", type=float, default=CalibrationParameters.bandwidth)
     parser.add_argument("--delay", type=int, help="periods of delay of every plant")
-    parser.add_argument("--dt", type=float, default=0.004, help="control period [s]")
-    parser.add_argument("--no-predict", dest="predict", action="store_false",
-                        help="track the samples, not the predicted state")  # fmt: skip
+    parser.add_argument("--dt", type=float, default=VERIFIED_PERIOD, help="control period [s]")
+    parser.add_argument("--predict", choices=PREDICTIONS, default="needed",
+                        help="which joints track the predicted state "
+                             "(CalibrationParameters.predict)")  # fmt: skip
     add_robot_arguments(parser)
     args = parser.parse_args(argv)
     with warnings.catch_warnings():
@@ -104,12 +107,12 @@ def main(argv: list[str] | None = None) -> None:
         robot = robot_from(args)
     calibration = CalibrationParameters(stroke=args.stroke, speed=args.speed,
                                         bandwidth=args.bandwidth,
-                                        predict="needed" if args.predict else "never")  # fmt: skip
+                                        predict=args.predict)  # fmt: skip
     ranges = None if args.delay is None else PlantRanges(delay_periods=(args.delay, args.delay))
     tracking = calibration.at_period(args.dt)
     print(f"{robot.name} at {1 / args.dt:g} Hz: stroke {1e3 * tracking.stroke:.3g} mrad at "
           f"{tracking.speed:g} rad/s, {tracking.bandwidth:.3g} Hz"
-          f"{'' if args.predict else ', the samples tracked'}; error per joint [%], "
+          f", predicting {args.predict}; error per joint [%], "
           "fastest joint during | after [rad/s]")  # fmt: skip
     figures = []
     for seed in range(1, args.seeds + 1):

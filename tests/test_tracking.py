@@ -150,17 +150,30 @@ def test_the_loop_model_grows_or_decays_as_the_loop_simulated_in_time(
     assert np.sign(growth) == -np.sign(modelled)
 
 
-def test_the_prediction_is_exact_for_a_constant_acceleration():
-    """``predicted_state`` of a double integrator under the acceleration it keeps."""
-    q, qd, acceleration, period = (
-        np.array([0.1, -0.2]),
-        np.array([0.5, 0.0]),
-        np.array([2.0, -3.0]),
-        0.01,
-    )
+def test_the_prediction_is_a_double_integrators_motion_under_a_held_acceleration():
+    """``predicted_state`` against the arm integrated in time (Runge–Kutta, 100 substeps).
+
+    A double integrator under a held acceleration, from (q, q̇): its state one period on,
+    and two predictions of one period chained equal one of two periods.
+    """
+    q, qd = np.array([0.1, -0.2]), np.array([0.5, 0.0])
+    acceleration, period = np.array([2.0, -3.0]), 0.01
+    x, h = np.concatenate([q, qd]), period / 100
+
+    def derivative(x):
+        return np.concatenate([x[2:], acceleration])
+
+    for _ in range(100):
+        k1 = derivative(x)
+        k2 = derivative(x + h / 2 * k1)
+        k3 = derivative(x + h / 2 * k2)
+        k4 = derivative(x + h * k3)
+        x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
     ahead, speed = predicted_state(q, qd, acceleration, period)
-    np.testing.assert_allclose(ahead, q + qd * period + acceleration * period**2 / 2)
-    np.testing.assert_allclose(speed, qd + acceleration * period)
+    np.testing.assert_allclose(ahead, x[:2], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(speed, x[2:], rtol=0, atol=1e-12)
+    twice = predicted_state(*predicted_state(q, qd, acceleration, period), acceleration, period)
+    np.testing.assert_allclose(twice, predicted_state(q, qd, acceleration, 2 * period))
 
 
 @pytest.mark.parametrize("dt, bandwidth", [(0.008, 3.95), (0.01, 3.41), (0.004, 4.0)])

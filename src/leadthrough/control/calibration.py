@@ -84,7 +84,12 @@ whose loop, linearised with two periods of delay (the most of the plant family),
 damping ratio of 0.20. The 6 Hz of before had −0.02 there: friction damps it on the
 YuMi, but a Panda's levels are small beside its inertia, and on its dry #4 with two
 periods of delay joint 3 rang up to 2.6× the motion's speed, read its level 1.7× the
-truth, and the arm kept moving for 0.8 s after (``tests/test_calibration.py``).
+truth, and the arm kept moving for 0.8 s after (``tests/test_calibration.py``). Slower,
+where a joint's loop would grow with two periods of delay even so (its own viscous
+friction does not damp it: a Panda's below 250 Hz), that joint tracks the state predicted
+for when the command acts, one period after its sample (``predicted_state``; ``q``, ``q̇``
+and ``e`` above are then those predicted, G and M taken there, and the reference one period
+later): ``CalibrationParameters.predict``.
 """
 
 from __future__ import annotations
@@ -225,24 +230,25 @@ class CalibrationParameters:
             period after its sample (:func:`~leadthrough.control.tracking.predicted_state`),
             instead of the sample: ``"needed"`` (the default), each joint whose loop,
             linearised with two periods of delay (the plant family's longest) and damped by
-            the joint's own viscous friction (the model's, per unit of its inertia at the
-            pose), would grow (:attr:`CalibrationRun.predicted`); ``"always"``, every joint;
+            the joint's own viscous friction (the model's ``b / m_ii`` at the pose [1/s]),
+            would grow (:attr:`CalibrationRun.predicted`); ``"always"``, every joint;
             ``"never"``, none. Predicted, a loop that grows with two periods at 125 and 100
             Hz decays (ζ −0.07 and −0.08 → 0.10 and 0.11 without viscous friction). The
             prediction takes the command's acceleration for the arm's, which a load or a
             stick-slip jump the model lacks makes wrong until the loop catches up, so it is
-            kept to the joints that need it: needed, no joint at 250 Hz and faster, every
-            joint of the Panda (its viscous friction a hundredth of its inertia's) and the
-            YuMi's joints 1–3 and 7 at 125 and 100 Hz. At 125 Hz on every joint the YuMi's
-            light wrist, whose own friction damps its loop, jumped four strokes off on 2 of
-            16 plants (refused), and seeds 1–4 of ``benchmarks/guiding_quality.py`` guided
-            with 2 of 8 plants uncalibrated (vibration 1.51× passive); at 250 Hz on every
-            joint, seeds 5–8 guided 0.03 heavier. At 125 Hz
-            (``benchmarks/calibration_accuracy.py --robot panda --seeds 16 --dt 0.008
-            [--no-predict]``) tracking the samples refused a Panda's calibration on 6 of 16
-            plants, a joint at up to 2.8 rad/s, and left the arm moving at up to 0.34 rad/s;
-            as needed, none refused, every level within 11 %, the arm at rest, and the
-            YuMi's 16 plants calibrate as before (none refused, levels within 3.9 %).
+            kept to the joints that need it. With the default bandwidth that is no joint at
+            250 Hz and faster, and at 125 and 100 Hz (at the home pose) every joint of the
+            Panda (``b / m_ii`` 0–0.7 1/s) and the YuMi's joints 1–3 and 7 (its others 6–14
+            1/s), the UR10e's 1–3 (and 6 at 100 Hz). At 125 Hz on every joint the YuMi's
+            light wrist jumped four strokes off on 2 of 16 plants (refused), and seeds 1–4
+            of ``benchmarks/guiding_quality.py`` guided with 2 of 8 plants uncalibrated
+            (vibration 1.51× passive); at 250 Hz on every joint, seeds 5–8 guided 0.03
+            heavier. At 125 Hz (``benchmarks/calibration_accuracy.py --robot panda --seeds
+            16 --dt 0.008 [--predict never]``) tracking the samples refused a Panda's
+            calibration on 6 of 16 plants, a joint at up to 2.8 rad/s, and left the arm
+            moving at up to 0.34 rad/s; as needed, none refused, every level within 11.4 %,
+            the arm at rest, and the YuMi's 16 plants calibrate as before (none refused,
+            levels within 3.9 %).
     """
 
     stroke: float = 0.015
@@ -556,6 +562,10 @@ class CalibrationRun:
         gravity_uncertainty: Relative error of the model's gravity torque [–] (masses and
             drive gains, ``LeadThroughParameters.gravity_uncertainty``): what a payload must
             stand out of (:meth:`payload`).
+        dt: The control period [s] (``parameters`` are those for it,
+            :meth:`CalibrationParameters.at_period`): with two periods of delay, it decides
+            which joints' loops would grow and so track the predicted state
+            (:attr:`predicted`).
     """
 
     def __init__(
@@ -578,7 +588,7 @@ class CalibrationRun:
         #: the joints whose tracking takes the state predicted for when a command acts
         self.predicted = self._predicted_joints(dynamics, friction, dt)
         self._error_integral = np.zeros_like(self.pose)
-        self._last_t = 0.0
+        self._last_t: float | None = None  # the previous command's time [s]
         # the acceleration the last command asked for, its integral's share left out [rad/s²]
         self._accelerating = np.zeros_like(self.pose)
         self.disturbance: str | None = None  # why the calibration must stop, if it must
@@ -612,10 +622,11 @@ class CalibrationRun:
 
     def command(self, t: float, q: FloatArray, qd: FloatArray) -> FloatArray:
         """Torque [Nm] tracking the calibration motion at time ``t`` [s] from its start."""
-        self._check(q, qd, self._reference(t)[0])
-        period = max(t - self._last_t, 0.0)  # the robot's own, sample to sample
-        self._last_t = t
         q_ref, qd_ref, qdd_ref = self._reference(t)
+        self._check(q, qd, q_ref)
+        # the robot's own period, sample to sample (none before the first command)
+        period = 0.0 if self._last_t is None else max(t - self._last_t, 0.0)
+        self._last_t = t
         if self.predicted.any():  # where those joints will be when the command acts
             ahead, speed = predicted_state(q, qd, self._accelerating, period)
             q, qd = np.where(self.predicted, ahead, q), np.where(self.predicted, speed, qd)
