@@ -363,6 +363,8 @@ class Calibration:
             up to 14 % off (with two periods of delay up to 71 %; at 4 Hz within 8.8 %,
             ``calibration_accuracy.py --robot panda --seeds 16 --delay 2``). None: not
             known (0).
+        predicted: Joints whose tracking took the state predicted for when their command
+            acted (:attr:`CalibrationRun.predicted`). None: not known.
     """
 
     pose: FloatArray
@@ -376,6 +378,7 @@ class Calibration:
     measured: BoolArray | None = None
     coulomb_spread: FloatArray | None = None
     torque_offset: FloatArray | None = None
+    predicted: BoolArray | None = None
 
     def summary(self) -> str:
         """One line: what was measured, or why the calibration was refused.
@@ -394,9 +397,13 @@ class Calibration:
         offset = ""
         if self.torque_offset is not None:
             offset = f", measured torque offset up to {np.max(np.abs(self.torque_offset)):.3f} Nm"
+        ahead = ""
+        if self.predicted is not None and self.predicted.any():
+            joints = ", ".join(str(j + 1) for j in np.flatnonzero(self.predicted))
+            ahead = f", joint(s) {joints} tracked one period ahead"
         return (f"calibrated: payload {self.payload:.2f} kg, Coulomb levels "
                 f"×{scale.min():.2f}–{scale.max():.2f} of the model, gravity bias up to "
-                f"{np.max(np.abs(self.bias)):.3f} Nm{offset}")  # fmt: skip
+                f"{np.max(np.abs(self.bias)):.3f} Nm{offset}{ahead}")  # fmt: skip
 
     def lowered(self) -> FloatArray:
         """Per joint, how far below the model's a refused calibration read a level [–].
@@ -762,7 +769,7 @@ class CalibrationRun:
         spread = np.where(measured, 0.5 * np.hypot(_scatter(plus), _scatter(minus)), 0.0)
         return Calibration(self.pose, gravity_error, coulomb_error, payload, bias, scale, True,
                            measured=measured, coulomb_spread=spread,
-                           torque_offset=offset)  # fmt: skip
+                           torque_offset=offset, predicted=self.predicted)  # fmt: skip
 
     def _asked(self, t: FloatArray) -> FloatArray:
         """Samples in which the motion drove each joint up / down at pace, (2, n)."""
@@ -827,4 +834,4 @@ class CalibrationRun:
         measured = np.zeros(n, dtype=bool) if measured is None else measured
         return Calibration(self.pose, zeros, zeros, 0.0, zeros, scale, False,
                            f"calibration refused: {reason}", measured,
-                           torque_offset=offset)  # fmt: skip
+                           torque_offset=offset, predicted=self.predicted)  # fmt: skip
