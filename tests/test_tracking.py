@@ -7,6 +7,7 @@ import leadthrough as lt
 from leadthrough.control.tracking import (
     VERIFIED_PERIOD,
     JointTracker,
+    decaying_damping,
     loop_damping,
     pd_gains,
     period_bandwidth,
@@ -210,3 +211,22 @@ def test_a_loop_damped_more_at_250_hz_than_any_bandwidth_keeps_slower_gets_the_b
     assert 0.0 < bandwidth < 2.0
     best = max(loop_damping(gains(2.0 * np.pi * f), 0.008) for f in np.linspace(0.04, 2.0, 200))
     assert loop_damping(gains(2.0 * np.pi * bandwidth), 0.008) >= best - 0.01
+
+
+@pytest.mark.parametrize("dt, bandwidth", [(0.008, 3.95), (0.01, 3.41), (0.004, 4.0)])
+def test_the_least_damping_that_decays_is_where_the_loop_turns(dt, bandwidth):
+    """``decaying_damping``: just below it the loop grows, from it on it decays; 0 at 250 Hz.
+
+    With two periods of delay the calibration's loop at 125 Hz and 100 Hz needs a viscous
+    friction of about 7 per second per unit inertia (the YuMi's joints 4–6 have 8–14, the
+    Panda's at most 0.7); at 250 Hz it decays without any.
+    """
+    gains = pd_gains(1.0, 0.25)(2.0 * np.pi * bandwidth)
+    least = decaying_damping(gains, dt)
+    if dt <= VERIFIED_PERIOD:
+        assert least == 0.0 and loop_damping(gains, dt, 2) > 0.0
+        return
+    assert 5.0 < least < 9.0
+    assert loop_damping(gains, dt, 2, viscous=least) >= 0.0
+    assert loop_damping(gains, dt, 2, viscous=least - 0.01) < 0.0
+    assert loop_damping(gains, dt, 2, viscous=2.0 * least) > 0.0

@@ -101,9 +101,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from leadthrough.control.tracking import (
-    LONGEST_DELAY,
     VERIFIED_PERIOD,
-    loop_damping,
+    decaying_damping,
     pd_gains,
     period_bandwidth,
     predicted_state,
@@ -573,6 +572,9 @@ class CalibrationRun:
             :meth:`CalibrationParameters.at_period`): with two periods of delay, it decides
             which joints' loops would grow and so track the predicted state
             (:attr:`predicted`).
+        decaying_damping: :func:`~leadthrough.control.tracking.decaying_damping` of this
+            loop at ``dt`` [1/s], if the caller computed it beforehand (``LeadThrough``
+            does, when it is built: the run starts in a control period).
     """
 
     def __init__(
@@ -583,6 +585,7 @@ class CalibrationRun:
         parameters: CalibrationParameters | None = None,
         gravity_uncertainty: float = 0.15,
         dt: float = VERIFIED_PERIOD,
+        decaying_damping: float | None = None,
     ) -> None:
         self.parameters = parameters or CalibrationParameters()
         self.dynamics, self.friction = dynamics, friction
@@ -593,7 +596,7 @@ class CalibrationRun:
         self._direction = np.where(high - self.pose >= self.pose - low, 1.0, -1.0)
         self._gains = calibration_gains(2.0 * np.pi * self.parameters.bandwidth)
         #: the joints whose tracking takes the state predicted for when a command acts
-        self.predicted = self._predicted_joints(dynamics, friction, dt)
+        self.predicted = self._predicted_joints(dynamics, friction, dt, decaying_damping)
         self._error_integral = np.zeros_like(self.pose)
         self._last_t: float | None = None  # the previous command's time [s]
         # the acceleration the last command asked for, its integral's share left out [rad/s²]
@@ -611,21 +614,25 @@ class CalibrationRun:
         return self.parameters.duration
 
     def _predicted_joints(
-        self, dynamics: Dynamics, friction: FrictionModel, dt: float
+        self,
+        dynamics: Dynamics,
+        friction: FrictionModel,
+        dt: float,
+        least: float | None,
     ) -> NDArray[np.bool_]:
         """``predict`` per joint: ``"needed"``, where the joint's loop would grow.
 
         Linearised with two periods of delay (:data:`~leadthrough.control.tracking.
-        LONGEST_DELAY`) at the period ``dt`` [s], and with the joint's own viscous friction
-        per unit of its inertia at the pose, which damps it (:func:`~leadthrough.control.
-        tracking.loop_damping`).
+        LONGEST_DELAY`) at the period ``dt`` [s]: where the joint's own viscous friction
+        per unit of its inertia at the pose, which damps it, is below ``least``
+        (:func:`~leadthrough.control.tracking.decaying_damping`; computed here if None).
         """
         n = self.pose.size
         if self.parameters.predict != "needed":
             return np.full(n, self.parameters.predict == "always")
-        damping = friction.viscous / np.diag(dynamics.mass(self.pose))  # [1/s]
-        return np.array([loop_damping(self._gains, dt, LONGEST_DELAY, viscous=float(b)) < 0.0
-                         for b in damping])  # fmt: skip
+        if least is None:
+            least = decaying_damping(self._gains, dt)
+        return friction.viscous / np.diag(dynamics.mass(self.pose)) < least
 
     def command(self, t: float, q: FloatArray, qd: FloatArray) -> FloatArray:
         """Torque [Nm] tracking the calibration motion at time ``t`` [s] from its start."""

@@ -44,11 +44,13 @@ from leadthrough.control.calibration import (
     Calibration,
     CalibrationParameters,
     CalibrationRun,
+    calibration_gains,
     gravity_share,
 )
 from leadthrough.control.constraints import VirtualConstraint, constraint_torque
 from leadthrough.control.feedforward import DelayLine, FeedForwardTorques, PassiveFeedForward
 from leadthrough.control.parameters import LeadThroughParameters, Mode
+from leadthrough.control.tracking import decaying_damping
 from leadthrough.control.warm_up import exercise
 from leadthrough.errors import ParameterError, failure
 from leadthrough.estimation.observer import MomentumObserver
@@ -133,6 +135,12 @@ class LeadThrough:
         calibration = parameters.calibration  # at this period: computed once, here
         self._calibration_parameters = (None if calibration is None
                                         else calibration.at_period(self.dt))  # fmt: skip
+        # which joints' calibration loops need the prediction: decided here, not in the
+        # first control period of the run (~30 linearisations, and SciPy's import)
+        self._calibration_damping = None
+        if self.calibrate and self._calibration_parameters is not None:
+            gains = calibration_gains(2.0 * math.pi * self._calibration_parameters.bandwidth)
+            self._calibration_damping = decaying_damping(gains, self.dt)
         self.supervisor = SafetySupervisor(Dynamics(robot), dt, parameters.safety)
         self.law = self.law_class(robot, parameters, self.dt, friction)
         self.reset()
@@ -466,7 +474,7 @@ class LeadThrough:
             self._calibration_run = CalibrationRun(self.dynamics, self.friction, q,
                                                    self.calibration_parameters,
                                                    self.parameters.gravity_uncertainty,
-                                                   self.dt)  # fmt: skip
+                                                   self.dt, self._calibration_damping)  # fmt: skip
             self._calibration_start = t
         run, elapsed = self._calibration_run, t - self._calibration_start
         applied, _ = self._measured(tau_measured)

@@ -131,6 +131,32 @@ def loop_damping(
     return float(np.min(-modes.real / np.abs(modes)))
 
 
+def decaying_damping(gains: tuple[float, float, float], dt: float,
+                     delay: int = LONGEST_DELAY) -> float:  # fmt: skip
+    """The least viscous friction per unit inertia [1/s] with which a loop decays.
+
+    The loop of :func:`loop_damping` tracking the samples, ``delay`` periods of delay at
+    the period ``dt`` [s]: 0 where it decays without friction; else the ``b / m`` above
+    which it decays (bisected to 1e-3 1/s), a joint with less needs more than its own
+    friction (``CalibrationParameters.predict``). Offline: it takes ~30 linearisations.
+    """
+    if loop_damping(gains, dt, delay) >= 0.0:
+        return 0.0
+    low, high = 0.0, 1.0
+    while loop_damping(gains, dt, delay, viscous=high) < 0.0:
+        low, high = high, 2.0 * high
+        if high > 1e6:  # no friction damps it: every joint needs the prediction
+            return np.inf
+    while high - low > 1e-3:
+        middle = 0.5 * (low + high)
+        low, high = (
+            (middle, high)
+            if loop_damping(gains, dt, delay, viscous=middle) < 0.0
+            else (low, middle)
+        )
+    return high
+
+
 #: Bandwidths :func:`period_bandwidth` tries below its ceiling, as fractions of it [–]:
 #: the loop's least damping is not monotonic in the bandwidth (an integral that is a
 #: fixed share of the loop's time lowers it at low bandwidths too), so a grid, then a
