@@ -313,6 +313,16 @@ class CalibrationParameters:
         return dataclasses.replace(self, bandwidth=bandwidth,
                                    stroke=self.stroke * self.bandwidth / bandwidth)  # fmt: skip
 
+    def decaying_damping(self, dt: float) -> float:
+        """The least viscous friction per unit inertia [1/s] with which the tracking decays.
+
+        These settings' loop at the period ``dt`` [s], tracking the samples with two periods
+        of delay (:func:`~leadthrough.control.tracking.decaying_damping`): a joint with less
+        needs the prediction (``predict = "needed"``). ~30 linearisations: not for a
+        control period.
+        """
+        return decaying_damping(calibration_gains(2.0 * np.pi * self.bandwidth), dt)
+
     @property
     def frequency(self) -> float:
         """Frequency of the triangular velocity wave [Hz] (stroke = speed / 4f)."""
@@ -631,7 +641,7 @@ class CalibrationRun:
         if self.parameters.predict != "needed":
             return np.full(n, self.parameters.predict == "always")
         if least is None:
-            least = decaying_damping(self._gains, dt)
+            least = self.parameters.decaying_damping(dt)
         return friction.viscous / np.diag(dynamics.mass(self.pose)) < least
 
     def command(self, t: float, q: FloatArray, qd: FloatArray) -> FloatArray:

@@ -44,13 +44,11 @@ from leadthrough.control.calibration import (
     Calibration,
     CalibrationParameters,
     CalibrationRun,
-    calibration_gains,
     gravity_share,
 )
 from leadthrough.control.constraints import VirtualConstraint, constraint_torque
 from leadthrough.control.feedforward import DelayLine, FeedForwardTorques, PassiveFeedForward
 from leadthrough.control.parameters import LeadThroughParameters, Mode
-from leadthrough.control.tracking import decaying_damping
 from leadthrough.control.warm_up import exercise
 from leadthrough.errors import ParameterError, failure
 from leadthrough.estimation.observer import MomentumObserver
@@ -139,8 +137,7 @@ class LeadThrough:
         # first control period of the run (~30 linearisations, and SciPy's import)
         self._calibration_damping = None
         if self.calibrate and self._calibration_parameters is not None:
-            gains = calibration_gains(2.0 * math.pi * self._calibration_parameters.bandwidth)
-            self._calibration_damping = decaying_damping(gains, self.dt)
+            self._calibration_damping = self._calibration_parameters.decaying_damping(self.dt)
         self.supervisor = SafetySupervisor(Dynamics(robot), dt, parameters.safety)
         self.law = self.law_class(robot, parameters, self.dt, friction)
         self.reset()

@@ -140,21 +140,31 @@ def decaying_damping(gains: tuple[float, float, float], dt: float,
     which it decays (bisected to 1e-3 1/s), a joint with less needs more than its own
     friction (``CalibrationParameters.predict``). Offline: it takes ~30 linearisations.
     """
-    if loop_damping(gains, dt, delay) >= 0.0:
+
+    def grows(viscous: float) -> bool:
+        return loop_damping(gains, dt, delay, viscous=viscous) < 0.0
+
+    if not grows(0.0):
         return 0.0
     low, high = 0.0, 1.0
-    while loop_damping(gains, dt, delay, viscous=high) < 0.0:
+    while grows(high):
         low, high = high, 2.0 * high
         if high > 1e6:  # no friction damps it: every joint needs the prediction
             return np.inf
-    while high - low > 1e-3:
+    return _bisected(grows, low, high, 1e-3)[1]
+
+
+def _bisected(
+    below: Callable[[float], bool], low: float, high: float, tolerance: float
+) -> tuple[float, float]:
+    """``(low, high)`` narrowed to ``tolerance`` around where ``below`` turns False.
+
+    ``below(low)`` holds and ``below(high)`` does not; so it stays.
+    """
+    while high - low > tolerance:
         middle = 0.5 * (low + high)
-        low, high = (
-            (middle, high)
-            if loop_damping(gains, dt, delay, viscous=middle) < 0.0
-            else (low, middle)
-        )
-    return high
+        low, high = (middle, high) if below(middle) else (low, middle)
+    return low, high
 
 
 #: Bandwidths :func:`period_bandwidth` tries below its ceiling, as fractions of it [–]:
@@ -190,10 +200,12 @@ def period_bandwidth(
     index = int(np.argmax(scanned >= target))  # the first, i.e. the largest, that keeps it
     if index == 0:
         return ceiling
-    low, high = _SCAN[index], _SCAN[index - 1]
-    while high - low > 1e-4:  # bisection between a fraction that keeps it and one that does not
-        middle = 0.5 * (low + high)
-        low, high = (middle, high) if loop(middle) >= target else (low, middle)
+
+    def keeps(fraction: float) -> bool:
+        return loop(fraction) >= target
+
+    # between a fraction that keeps it and the next one up, which does not
+    low, _ = _bisected(keeps, _SCAN[index], _SCAN[index - 1], 1e-4)
     return float(low * ceiling)
 
 
