@@ -737,7 +737,9 @@ def test_at_every_rate_each_joints_loop_decays_with_two_periods_of_delay():
             settings = CalibrationParameters().at_period(dt)
             run = CalibrationRun(dynamics, friction, robot.home(), settings, dt=dt)
             gains = calibration_gains(2.0 * np.pi * settings.bandwidth)
-            least = 0.15 if dt <= 0.004 else 0.09  # 250 Hz: 0.20; 125 Hz: 0.10 predicted
+            # required: decays with room for what the linear model lacks (measured 0.20 at
+            # 250 Hz; 0.10 and 0.11 predicted at 125 and 100 Hz)
+            least = 0.15 if dt <= 0.004 else 0.05
             for predicted, viscous in zip(run.predicted, own, strict=True):
                 if predicted:
                     assert loop_damping(gains, dt, 2, viscous=viscous) < 0.0

@@ -182,12 +182,13 @@ def test_the_prediction_takes_a_period_out_of_the_loop(dt, bandwidth):
     """One period predicted: two periods of delay damp about as one did without it.
 
     At 125 Hz and 100 Hz the calibration's loop grows with two periods unpredicted (ζ
-    −0.07, −0.08) and decays predicted (≥ 0.09); at every rate it gains damping.
+    −0.07, −0.08) and decays predicted (required ≥ 0.05; 0.10 and 0.11); at every rate it
+    gains damping.
     """
     gains = pd_gains(1.0, 0.25)(2.0 * np.pi * bandwidth)
     for delay in (1, 2):
         assert loop_damping(gains, dt, delay, predicted=True) > loop_damping(gains, dt, delay)
-    assert loop_damping(gains, dt, 2, predicted=True) > 0.09
+    assert loop_damping(gains, dt, 2, predicted=True) > 0.05
     if dt > VERIFIED_PERIOD:
         assert loop_damping(gains, dt, 2) < 0.0
 
