@@ -7,6 +7,7 @@ import pytest
 
 import leadthrough as lt
 from leadthrough.control.parameters import LeadThroughParameters
+from leadthrough.control.tracking import loop_damping
 from leadthrough.experiments.stability import (
     MARGIN,
     JointLoop,
@@ -116,3 +117,64 @@ def test_an_observer_slowed_by_friction_noise_costs_damping():
                      for p in (defaults, unbounded))  # fmt: skip
     assert slow >= MARGIN  # the linear loop holds either way ...
     assert bounded > slow + 0.03  # ... but the lag costs a good share of its damping
+
+
+def test_below_250_hz_the_velocity_loop_is_the_stiffest_that_keeps_the_most_damping():
+    """``LeadThroughParameters.at_period`` against a scan of velocity times, per period.
+
+    At 250 Hz and faster the settings are kept as they are. Slower, the active law's
+    tracking loop, linearised (``tracking.loop_damping``), keeps the damping it has at 250
+    Hz, or, where no velocity time keeps that, the most any of a fine scan keeps; no
+    stiffer velocity loop keeps as much; and at 125 and 100 Hz that is clearly more than
+    the 250 Hz gains leave.
+    """
+    p = LeadThroughParameters()
+    for dt in (0.001, 0.002, 0.004):
+        assert p.at_period(dt) is p
+
+    def damping(velocity_time: float, dt: float) -> float:
+        return loop_damping(p.tracking_gains(1.0 / velocity_time), dt)
+
+    at_250_hz = damping(p.velocity_time, 0.004)
+    times = np.linspace(p.velocity_time, 0.3, 501)
+    for dt in (0.005, 0.008, 0.01):
+        chosen = p.at_period(dt).velocity_time
+        scanned = np.array([damping(t, dt) for t in times])
+        target = min(at_250_hz, scanned.max())
+        assert damping(chosen, dt) >= target - 2e-3
+        assert np.all(scanned[times < chosen - 1e-3] < target)
+        if dt >= 0.008:
+            assert damping(chosen, dt) > damping(p.velocity_time, dt) + 0.05
+
+
+def test_a_relaxed_hands_loop_keeps_its_250_hz_damping_at_slower_rates():
+    """The coupled loop with a hand at 125 and 100 Hz, one and two periods of delay.
+
+    With the 250 Hz gains a relaxed hand's loop (300 N/m) loses a fifth or more of the
+    damping it has at 250 Hz; with the velocity loop of :meth:`at_period` (what
+    ``worst_damping`` and the controller use) it keeps it within 0.03; the firm hand's
+    loop keeps the margin either way.
+    """
+    robot, p = lt.robots.yumi(), LeadThroughParameters()
+
+    def least(parameters: LeadThroughParameters, hand: float, dt: float) -> float:
+        loops = joint_loops(robot, parameters, hand, 1.8 * np.sqrt(hand), dt)
+        variants = (parameters, replace(parameters, unwind_time=None))
+        return min(least_damping(loop_matrix(loop, variant, dt, delay), dt)
+                   for loop in loops for variant in variants for delay in (1, 2))  # fmt: skip
+
+    at_250_hz = least(p, 300.0, DT)
+    for dt in (0.008, 0.01):
+        assert least(p, 300.0, dt) < 0.8 * at_250_hz
+        assert least(p.at_period(dt), 300.0, dt) >= at_250_hz - 0.03
+        assert min(worst_damping(robot, p, 3000.0, 100.0, dt, delay) for delay in (1, 2)) >= MARGIN
+
+
+def test_the_controller_runs_the_velocity_loop_of_its_period():
+    """The active law takes the softened velocity loop; the parameters given stay as given."""
+    robot, p = lt.robots.yumi(), LeadThroughParameters()
+    for dt in (0.004, 0.01):
+        controller = lt.LeadThrough(robot, mode="active", dt=dt)
+        assert controller.parameters.velocity_time == p.velocity_time
+        assert controller.law.parameters.velocity_time == p.at_period(dt).velocity_time
+    assert p.at_period(0.01).velocity_time > 2.0 * p.velocity_time

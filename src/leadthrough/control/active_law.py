@@ -121,12 +121,13 @@ class ActiveLaw:
         dt: float,
         nominal_friction: FrictionModel,
     ) -> None:
-        self.robot, self.parameters, self.dt = robot, parameters, dt
+        # the velocity loop softened below 250 Hz (LeadThroughParameters.at_period)
+        self.robot, self.parameters, self.dt = robot, parameters.at_period(dt), dt
         self.n = robot.n_joints
-        self._reference_low = robot.q_min + parameters.limit_zone
-        self._reference_high = robot.q_max - parameters.limit_zone
-        self._speed_cap = parameters.assist_speed_fraction * robot.velocity_limits
-        p = parameters  # the scalars of the compiled law (fused.DRIVE/ADMITTANCE_SCALARS)
+        p = self.parameters  # the scalars of the compiled law (fused.DRIVE/ADMITTANCE_SCALARS)
+        self._reference_low = robot.q_min + p.limit_zone
+        self._reference_high = robot.q_max - p.limit_zone
+        self._speed_cap = p.assist_speed_fraction * robot.velocity_limits
         self._push_average = dt / (p.push_time + dt)  # the average over push_time
         self._settle_rate = dt / (p.settle_time + dt)  # a resting reference's, settle_time
         # a lagging joint's velocity reference's, unwind_time (None: never)

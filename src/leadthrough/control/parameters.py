@@ -27,6 +27,7 @@ import numpy as np
 from leadthrough.control.calibration import CalibrationParameters
 from leadthrough.control.dither import DitherParameters
 from leadthrough.control.feedforward import measurement_delay
+from leadthrough.control.tracking import period_bandwidth
 from leadthrough.errors import ParameterError
 from leadthrough.estimation.observer import ObserverParameters
 from leadthrough.estimation.tool_force import ToolForceParameters
@@ -106,7 +107,8 @@ class LeadThroughParameters:
         position_bandwidth: K_P_ii = m_ii(q) (2π f)² [Hz]; 0 is damping control (§6.3.1).
         velocity_time: K_D_ii = m_ii(q) / velocity_time [s]: 20 rad/s, below the bandwidth
             of a differenced, filtered velocity (15–40 Hz); a stiffer velocity loop on that
-            lagging signal oscillates.
+            lagging signal oscillates. At 250 Hz and faster; at a slower rate the
+            controller softens it as its delay requires (:meth:`at_period`).
         stiction_margin: Relative Coulomb error at rest that no sigmoid model describes
             (stiction, Stribeck) [–]; part of what the model may read without an operator,
             and the smallest friction error assumed.
@@ -242,6 +244,35 @@ class LeadThroughParameters:
                                  f"rest_velocity {self.rest_velocity:g}: set rest_velocity only "
                                  "(one definition of at rest)")  # fmt: skip
         object.__setattr__(self, table, dataclasses.replace(settings, **{name: self.rest_velocity}))
+
+    def at_period(self, dt: float) -> LeadThroughParameters:
+        """These settings for a control period ``dt`` [s]: the same at 250 Hz and faster.
+
+        The active law tracks its references with ``K_P = m_ii (2π position_bandwidth)²``
+        and ``K_D = m_ii / velocity_time``, on a velocity that arrives a period late and
+        low-passed. At a slower rate the same gains leave that loop less phase: linearised
+        (:func:`~leadthrough.control.tracking.loop_damping`), its least damping ratio falls
+        from 0.79 at 250 Hz to 0.66 at 125 Hz and 0.61 at 100 Hz, and the guiding shook up
+        to 1.48× and 1.73× passive there (seeds 1–4, the YuMi). So the velocity loop's rate
+        ``1 / velocity_time`` is treated as a bandwidth that follows the period
+        (:func:`~leadthrough.control.tracking.period_bandwidth`, as the calibration's and
+        the replay's do): the fastest up to the one asked for that keeps the damping it
+        has at 250 Hz, or, where none does, the most any keeps. With the defaults:
+        0.05 s at 250 Hz and faster, 0.111 s at 125 Hz, 0.118 s at 100 Hz.
+        """
+        ceiling = 1.0 / (2.0 * np.pi * self.velocity_time)  # the velocity loop's rate [Hz]
+        rate = period_bandwidth(ceiling, dt, self.tracking_gains)
+        if rate == ceiling:
+            return self
+        return dataclasses.replace(self, velocity_time=1.0 / (2.0 * np.pi * rate))
+
+    def tracking_gains(self, omega: float) -> tuple[float, float, float]:
+        """The active law's tracking gains per unit inertia, velocity loop at ``omega`` [1/s].
+
+        ``((2π position_bandwidth)², ω, 0)``: K_P [1/s²], K_D [1/s], no integral
+        (:data:`~leadthrough.control.tracking.LoopGains`).
+        """
+        return (2.0 * np.pi * self.position_bandwidth) ** 2, omega, 0.0
 
     @property
     def gravity_uncertainty(self) -> float:

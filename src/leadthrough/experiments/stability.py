@@ -173,7 +173,11 @@ def worst_damping(
     joint lags, part of each cycle; a linear loop cannot switch, so it is taken both
     always on and always off, and the smaller ζ counts. (On the YuMi with a firm hand it
     costs the defaults' loop ζ, 0.32 → 0.19, and helps a light admittance's.)
+
+    The law's gains are those the controller runs at ``dt``: below 250 Hz its velocity
+    loop softened (:meth:`~leadthrough.control.parameters.LeadThroughParameters.at_period`).
     """
+    parameters = parameters.at_period(dt)
     loops = joint_loops(robot, parameters, hand_stiffness, hand_damping, dt,
                         hand_mass=hand_mass)  # fmt: skip
     variants = [parameters]
