@@ -178,3 +178,16 @@ def test_the_controller_runs_the_velocity_loop_of_its_period():
         assert controller.parameters.velocity_time == p.velocity_time
         assert controller.law.parameters.velocity_time == p.at_period(dt).velocity_time
     assert p.at_period(0.01).velocity_time > 2.0 * p.velocity_time
+
+
+def test_damping_control_keeps_its_velocity_loop_at_every_rate():
+    """Without position feedback there is no best velocity loop to soften to.
+
+    Its loop's least damping ratio (finite: the resting mode at λ = 1 is left out) keeps
+    rising as the loop softens, up to seconds at 50 Hz, so ``at_period`` leaves it alone.
+    """
+    p = LeadThroughParameters.damping_control()
+    ratios = [loop_damping(p.tracking_gains(1.0 / t), 0.01) for t in (0.05, 0.2, 0.4)]
+    assert np.all(np.isfinite(ratios)) and ratios[0] < ratios[1] < ratios[2]
+    for dt in (0.008, 0.01, 0.02):
+        assert p.at_period(dt) is p

@@ -258,8 +258,18 @@ class LeadThroughParameters:
         (:func:`~leadthrough.control.tracking.period_bandwidth`, as the calibration's and
         the replay's do): the fastest up to the one asked for that keeps the damping it
         has at 250 Hz, or, where none does, the most any keeps. With the defaults:
-        0.05 s at 250 Hz and faster, 0.111 s at 125 Hz, 0.118 s at 100 Hz.
+        0.05 s at 250 Hz and faster, 0.081 s at 200 Hz, 0.111 s at 125 Hz, 0.118 s at
+        100 Hz. Apply it once, to the settings as given (the controller does: its law's
+        ``parameters`` are the result): the damping kept is that of ``velocity_time`` at
+        250 Hz, so settings already softened would be softened again.
+
+        Damping control (``position_bandwidth`` 0, :meth:`damping_control`) is left as
+        given: without position feedback the loop's least damping ratio rises without a
+        peak as its velocity loop softens, and keeping 250 Hz's would take 0.23 s at 125
+        Hz, 0.38 s at 100 Hz and 2 s at 50 Hz, a loop that hardly tracks (not measured).
         """
+        if self.position_bandwidth == 0.0:
+            return self
         ceiling = 1.0 / (2.0 * np.pi * self.velocity_time)  # the velocity loop's rate [Hz]
         rate = period_bandwidth(ceiling, dt, self.tracking_gains)
         if rate == ceiling:

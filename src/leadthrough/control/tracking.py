@@ -100,7 +100,8 @@ def loop_damping(
     ``e`` and ``v`` are taken one period ahead (:func:`predicted_state`, the filtered
     velocity standing for the joint's). ``viscous`` [1/s]: the joint's own viscous friction
     per unit inertia, ``b / m_ii``, which damps the arm. Each eigenvalue λ of the map over
-    one period is a mode ``s = ln(λ) / dt`` of damping ratio ``−Re(s) / |s|``.
+    one period is a mode ``s = ln(λ) / dt`` of damping ratio ``−Re(s) / |s|`` (λ = 1, the
+    resting mode of a loop without position feedback, left out).
     """
     from scipy.linalg import expm  # not at import: ``import leadthrough`` stays light
 
@@ -127,7 +128,10 @@ def loop_damping(
 
     size = 3 + has_integral + delay
     eigenvalues = np.linalg.eigvals(np.column_stack([step(unit) for unit in np.eye(size)]))
-    modes = np.log(eigenvalues[np.abs(eigenvalues) > 1e-12].astype(complex)) / dt
+    # a mode at λ = 1 (no position feedback: any position is an equilibrium) neither
+    # grows nor decays, and has no damping ratio
+    kept = (np.abs(eigenvalues) > 1e-12) & (np.abs(eigenvalues - 1.0) > 1e-9)
+    modes = np.log(eigenvalues[kept].astype(complex)) / dt
     return float(np.min(-modes.real / np.abs(modes)))
 
 
