@@ -180,6 +180,21 @@ def test_the_controller_runs_the_velocity_loop_of_its_period():
     assert p.at_period(0.01).velocity_time > 2.0 * p.velocity_time
 
 
+def test_the_unwinding_keeps_its_ratio_to_the_velocity_loop():
+    """The push the PD stores against a stuck joint, ~ unwind / velocity time, is kept.
+
+    A lead the admittance builds against a joint that does not follow relaxes over
+    ``unwind_time``, and the PD pushes it with ``K_D = m / velocity_time``: the ratio of the
+    two is what a lagging joint gets. None (the thesis) stays None.
+    """
+    p = LeadThroughParameters(unwind_time=0.03)
+    for dt in (0.005, 0.008, 0.01):
+        slow = p.at_period(dt)
+        assert slow.velocity_time > p.velocity_time
+        assert slow.unwind_time / slow.velocity_time == pytest.approx(0.03 / 0.05, rel=1e-12)
+    assert LeadThroughParameters(unwind_time=None).at_period(0.01).unwind_time is None
+
+
 def test_damping_control_keeps_its_velocity_loop_at_every_rate():
     """Without position feedback there is no best velocity loop to soften to.
 

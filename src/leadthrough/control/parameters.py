@@ -93,7 +93,8 @@ class LeadThroughParameters:
             the joint's velocity [s] (:func:`~leadthrough.control.admittance.unwound`):
             the admittance cannot wind up against a joint that does not follow, so the
             PD has no stored push to release when the joint breaks away (stick-slip).
-            None never unwinds (the thesis).
+            None never unwinds (the thesis). At 250 Hz and faster; slower, it keeps its
+            ratio to ``velocity_time`` (:meth:`at_period`).
         assist_knee: Residual torque, in multiples of the model's uncertainty, of which half
             passes to the admittance [–] (:func:`~leadthrough.control.admittance.operator_weight`);
             0 passes everything (the thesis).
@@ -259,9 +260,14 @@ class LeadThroughParameters:
         the replay's do): the fastest up to the one asked for that keeps the damping it
         has at 250 Hz, or, where none does, the most any keeps. With the defaults:
         0.05 s at 250 Hz and faster, 0.081 s at 200 Hz, 0.111 s at 125 Hz, 0.118 s at
-        100 Hz. Apply it once, to the settings as given (the controller does: its law's
-        ``parameters`` are the result): the damping kept is that of ``velocity_time`` at
-        250 Hz, so settings already softened would be softened again.
+        100 Hz. ``unwind_time`` keeps its ratio to it (equal with the defaults): the push
+        the PD stores against a joint that does not follow, about ``unwind_time /
+        velocity_time`` times the drive over k_M, stays what it is at 250 Hz (with the
+        unwinding left at 0.05 s it halved; seeds 5–8 then shook 1.53× and 1.55× passive
+        at 125 and 100 Hz, 1.37× and 1.32× with it kept). Apply it once, to the settings
+        as given (the controller does: its law's ``parameters`` are the result): the
+        damping kept is that of ``velocity_time`` at 250 Hz, so settings already softened
+        would be softened again.
 
         Damping control (``position_bandwidth`` 0, :meth:`damping_control`) is left as
         given: without position feedback the loop's least damping ratio rises without a
@@ -274,7 +280,11 @@ class LeadThroughParameters:
         rate = period_bandwidth(ceiling, dt, self.tracking_gains)
         if rate == ceiling:
             return self
-        return dataclasses.replace(self, velocity_time=1.0 / (2.0 * np.pi * rate))
+        velocity_time = 1.0 / (2.0 * np.pi * rate)
+        unwind = self.unwind_time
+        if unwind is not None:
+            unwind *= velocity_time / self.velocity_time
+        return dataclasses.replace(self, velocity_time=velocity_time, unwind_time=unwind)
 
     def tracking_gains(self, omega: float) -> tuple[float, float, float]:
         """The active law's tracking gains per unit inertia, velocity loop at ``omega`` [1/s].
