@@ -151,9 +151,9 @@ def test_a_relaxed_hands_loop_keeps_its_250_hz_damping_at_slower_rates():
     """The coupled loop with a hand at 125 and 100 Hz, one and two periods of delay.
 
     With the 250 Hz gains a relaxed hand's loop (300 N/m) loses a fifth or more of the
-    damping it has at 250 Hz; with the velocity loop of :meth:`at_period` (what
-    ``worst_damping`` and the controller use) it keeps it within 0.03; the firm hand's
-    loop keeps the margin either way.
+    damping it has at 250 Hz; with the velocity loop and unwinding of :meth:`at_period`
+    (what ``worst_damping`` and the controller use) it keeps it within 0.03, and the firm
+    hand's loop keeps at least its 250 Hz damping (the margin either way).
     """
     robot, p = lt.robots.yumi(), LeadThroughParameters()
 
@@ -163,10 +163,11 @@ def test_a_relaxed_hands_loop_keeps_its_250_hz_damping_at_slower_rates():
         return min(least_damping(loop_matrix(loop, variant, dt, delay), dt)
                    for loop in loops for variant in variants for delay in (1, 2))  # fmt: skip
 
-    at_250_hz = least(p, 300.0, DT)
+    at_250_hz, firm_at_250_hz = least(p, 300.0, DT), least(p, 3000.0, DT)
     for dt in (0.008, 0.01):
         assert least(p, 300.0, dt) < 0.8 * at_250_hz
         assert least(p.at_period(dt), 300.0, dt) >= at_250_hz - 0.03
+        assert least(p.at_period(dt), 3000.0, dt) >= firm_at_250_hz >= MARGIN
         assert min(worst_damping(robot, p, 3000.0, 100.0, dt, delay) for delay in (1, 2)) >= MARGIN
 
 
@@ -177,6 +178,7 @@ def test_the_controller_runs_the_velocity_loop_of_its_period():
         controller = lt.LeadThrough(robot, mode="active", dt=dt)
         assert controller.parameters.velocity_time == p.velocity_time
         assert controller.law.parameters.velocity_time == p.at_period(dt).velocity_time
+        assert controller.law.parameters.unwind_time == p.at_period(dt).unwind_time
     assert p.at_period(0.01).velocity_time > 2.0 * p.velocity_time
 
 
