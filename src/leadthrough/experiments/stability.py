@@ -175,7 +175,8 @@ def worst_damping(
     costs the defaults' loop ζ, 0.32 → 0.19, and helps a light admittance's.)
 
     The law's gains are those the controller runs at ``dt``: below 250 Hz its velocity
-    loop softened (:meth:`~leadthrough.control.parameters.LeadThroughParameters.at_period`).
+    loop softened and its unwinding slowed by as much
+    (:meth:`~leadthrough.control.parameters.LeadThroughParameters.at_period`).
     """
     parameters = parameters.at_period(dt)
     loops = joint_loops(robot, parameters, hand_stiffness, hand_damping, dt,
