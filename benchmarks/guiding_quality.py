@@ -137,7 +137,8 @@ def plant_ranges(settings: list[str] | None) -> PlantRanges:
             (one line naming it).
     """
     defaults, changes = PlantRanges(), {}
-    known = [f.name for f in fields(PlantRanges)]
+    # the ranges (--enabling-device sets the one switch)
+    known = [f.name for f in fields(PlantRanges) if not isinstance(f.default, bool)]
     for setting in settings or []:
         name, _, text = setting.partition("=")
         if name not in known:
@@ -187,6 +188,12 @@ def main(argv: list[str] | None = None) -> None:
         "position_amplitude=0.25 friction_scale=0.7,1.3 (default: the family the defaults "
         "were developed on)",
     )
+    parser.add_argument(
+        "--enabling-device",
+        action="store_true",
+        help="plants with a hand-guiding enabling device, held while the hand holds the arm "
+        "and let go with it (JointState.enabling)",
+    )
     parser.add_argument("--save", help="write the per-case figures and the summary to JSON")
     parser.add_argument("--compare", help="a JSON saved before: print its summary alongside")
     parser.add_argument(
@@ -222,7 +229,7 @@ def main(argv: list[str] | None = None) -> None:
     if unknown:
         parser.error(f"unknown hand(s) {', '.join(unknown)}: choose from {', '.join(HANDS)}")
     try:
-        ranges = plant_ranges(args.plants)
+        ranges = replace(plant_ranges(args.plants), enabling_device=args.enabling_device)
     except ValueError as error:
         parser.error(str(error))
     try:

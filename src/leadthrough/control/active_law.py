@@ -142,6 +142,9 @@ class ActiveLaw:
             self._unwind_rate])  # fmt: skip
         self._terms = np.zeros((4, self.n))  # the friction terms of a period (terms_into)
         self._term_rows = tuple(self._terms)  # its rows (views), for the compiled drive
+        self.enabling: bool | None = None
+        self._no_push = np.zeros(self.n)  # what drives the admittance while released
+        self._margin_applied = self.margin_share  # 0 while the enabling device is held
         self.use_friction(nominal_friction)
         self.reset()
 
@@ -166,9 +169,10 @@ class ActiveLaw:
         self.friction_error = relative
         self._noise_band = 2.0 * friction.noise_std
         rest_tolerance = p.stiction_margin * friction.coulomb + self._noise_band
+        self._viscous_error = relative.copy()
         self._joint_constants = np.array([relative * friction.coulomb + self._noise_band,
-            self._reference_low, self._reference_high, self.margin_share * relative,
-            rest_tolerance, self._speed_cap, self.margin_share * relative,
+            self._reference_low, self._reference_high, self._margin_applied * relative,
+            rest_tolerance, self._speed_cap, self._margin_applied * relative,
         ])  # fused.JOINT_ROWS  # fmt: skip
         # views of its rows: set_friction_error changes them in place
         self._friction_tolerance = self._joint_constants[0]
@@ -187,9 +191,34 @@ class ActiveLaw:
         least ``stiction_margin`` (as :meth:`use_friction` makes it).
         """
         self.friction_error[:] = relative
-        np.multiply(self.margin_share, relative, out=self.margin_error)
+        np.multiply(self._margin_applied, relative, out=self.margin_error)
         np.multiply(relative, self.friction.coulomb, out=self._friction_tolerance)
         self._friction_tolerance += self._noise_band
+
+    def use_enabling(self, enabling: bool | None) -> None:
+        """The hand-guiding enabling device's state this period (``JointState.enabling``).
+
+        The friction margin is there so that a released arm stops: a friction level the
+        model overstates reads, once the hand has let go, exactly as a push along the
+        motion would (README, *Where the effort goes*). An enabling device says directly
+        whether a hand is on the arm, so:
+
+        - held (True): the margin is not removed (:attr:`margin_error` 0). The level's
+          error then passes as assist, which the hand that holds the arm resists; the
+          weight still scales every reading by the model's uncertainty.
+        - released (False): nobody guides. No push drives the admittance
+          (:meth:`tracking`; :attr:`drive` stays the readout), so its damping rises to
+          the rest damping, and its position reference stays where the arm is: the PD
+          stores no push from the motion to pull the arm on with, and the arm stops. The
+          margin is back for the next grab.
+        - None (no device): the margin guarantees the stop, as without this.
+        """
+        self.enabling = enabling
+        applied = 0.0 if enabling else self.margin_share
+        if applied != self._margin_applied:
+            self._margin_applied = applied
+            np.multiply(applied, self.friction_error, out=self.margin_error)
+            np.multiply(applied, self._viscous_error, out=self.viscous_margin_error)
 
     def reset(self) -> None:
         """Forget the bias, the weights and the references."""
@@ -282,17 +311,29 @@ class ActiveLaw:
             constraint: Virtual constraints' torque [Nm].
             mass: M(q) [kg m²].
         """
-        if not self.compiled:
-            return self._admittance(q, qd, self.drive + constraint, mass,
-                                    self.residual + constraint)  # fmt: skip
+        drive, residual = self.drive, self.residual
         if self.references is None:
             self.references = AdmittanceState(q.copy(), qd.copy())
         references = self.references
-        admittance_law(q, qd, self.drive, constraint, mass, self.residual, self.uncertainty,
+        if self.enabling is False:
+            drive = residual = self._released(q)
+        if not self.compiled:
+            return self._admittance(q, qd, drive + constraint, mass, residual + constraint)
+        admittance_law(q, qd, drive, constraint, mass, residual, self.uncertainty,
                        self._joint_constants, self._admittance_scalars, references.q_ref,
                        references.qd_ref, self.sustained, self.damping_weight,
                        self.signed_weight, self.feedback, self._work)  # fmt: skip
         return self.feedback
+
+    def _released(self, q: FloatArray) -> FloatArray:
+        """The enabling device released: no push, and the position reference where the arm is.
+
+        Nobody guides, whatever the observer reads; and a reference the admittance ran
+        ahead of the arm would have the PD's spring pull it on after the hand let go
+        (over ``K_D / K_P`` ≈ 0.5 s, until ``settle_time`` draws it back).
+        """
+        self.references.q_ref[:] = q  # type: ignore[union-attr]
+        return self._no_push
 
     def _update_drive(
         self, estimate: FloatArray, q: FloatArray, qd: FloatArray, gravity: FloatArray

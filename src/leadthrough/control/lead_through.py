@@ -330,6 +330,7 @@ class LeadThrough:
         self._sent = DelayLine((2, n), p.measurement_delay)  # (command, its dither) [Nm]
         self._own_clock = 0.0  # [s], for the positional form of step, which brings no time
         self._t = float("nan")
+        self._enabling: bool | None = None  # the sample's enabling device (JointState)
         self._stage = "sample"
         self.model: ModelSnapshot | None = None  # the model at the latest sample
         self.last_feed_forward: FeedForwardTorques | None = None
@@ -442,6 +443,7 @@ class LeadThrough:
             self._own_clock += self.dt
         sample = joint_state(state, qd, tau, self._own_clock)
         self._t = float(sample.t)
+        self._enabling = sample.enabling
         return self._t, sample.q, sample.qd, sample.tau_measured
 
     def _send(self, command: FloatArray, dither: FloatArray) -> FloatArray:
@@ -550,6 +552,7 @@ class LeadThrough:
     ) -> tuple[FloatArray, FloatArray]:
         """The guiding command [Nm] and the dither it holds [Nm]."""
         q, qd = model.q, model.qd
+        self.law.use_enabling(self._enabling)  # before the level error scales the margin
         if self.level_error is not None:
             self._follow_level_error(q)
         applied, dither = self._measured(tau_measured)

@@ -26,12 +26,16 @@ class JointState:
         qd: Joint velocities as the robot reports them (noisy) [rad/s], shape (n,).
         tau_measured: Motor torque actually applied, as measured, arm side [Nm], shape (n,),
             or None for a robot that measures none.
+        enabling: The hand-guiding enabling device (the button on the tool or the
+            pendant that ISO 10218-1 asks of hand guiding), as the robot reports it: True
+            while it is held, False while it is released, None for a robot without one.
     """
 
     t: float
     q: FloatArray
     qd: FloatArray
     tau_measured: FloatArray | None
+    enabling: bool | None = None
 
 
 def joint_state(

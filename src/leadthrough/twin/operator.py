@@ -60,6 +60,14 @@ class Operator:
         """
         return np.zeros(np.asarray(q).shape[0])
 
+    def holds(self, t: float) -> bool:
+        """Whether the operator holds the arm, and with it its enabling device, at ``t`` [s].
+
+        A person who touches the arm holds it throughout; :class:`During` only inside its
+        window. (The twin asks only an operator who touches the arm.)
+        """
+        return True
+
 
 NoOperator = Operator
 """Nobody touches the arm."""
@@ -323,6 +331,10 @@ class During(Operator):
         if not self.start <= t < self.stop:
             return np.zeros(len(q))
         return self.operator.joint_torque(t - self.start, q, qd)
+
+    def holds(self, t: float) -> bool:
+        """Held inside the window only: the enabling device is let go with the arm."""
+        return self.start <= t < self.stop and self.operator.holds(t - self.start)
 
 
 def _impedance(

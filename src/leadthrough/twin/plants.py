@@ -55,6 +55,8 @@ class PlantRanges:
         torque_offset: Measured-torque offset [Nm].
         velocity_cutoff: Corner of the velocity low-pass [Hz].
         position_amplitude: Relative position dependence of the dry friction [–].
+        enabling_device: Whether the arms have a hand-guiding enabling device, held while
+            the operator holds the arm (``TwinConfig.enabling_device``; not drawn).
     """
 
     mass_error: float = 0.05
@@ -69,6 +71,7 @@ class PlantRanges:
     torque_offset: tuple[float, float] = (-0.05, 0.05)
     velocity_cutoff: tuple[float, float] = (15.0, 40.0)
     position_amplitude: float = 0.15
+    enabling_device: bool = False
 
     def __post_init__(self) -> None:
         for name, (allowed, text) in _RANGE_RULES.items():
@@ -173,6 +176,7 @@ def sample_plant(
         friction=params,
         friction_physics=friction,
         seed=seed,
+        enabling_device=r.enabling_device,
     )
     return Plant(f"{friction} #{seed}", seed, friction, config)
 

@@ -63,6 +63,10 @@ class TwinConfig:
         table: Optional table surface for contact.
         ft_noise_std: Noise of the wrist force/torque sensor, (force [N], moment [Nm]).
         seed: Seed of every random draw of this twin.
+        enabling_device: Whether the arm has a hand-guiding enabling device: then each
+            sample reports it held while the operator holds the arm
+            (:meth:`~leadthrough.twin.operator.Operator.holds`), released otherwise;
+            without one, ``JointState.enabling`` is None.
     """
 
     physics_dt: float = 0.0005
@@ -75,6 +79,7 @@ class TwinConfig:
     table: TableSurface | None = None
     ft_noise_std: tuple[float, float] = (0.02, 0.0005)
     seed: int = 0
+    enabling_device: bool = False
 
     def __post_init__(self) -> None:
         real("physics_dt", self.physics_dt, minimum=0.0, strict=True, error=ParameterError)
@@ -236,12 +241,19 @@ class DigitalTwin(RobotInterface):
         self.truth = self._sample_truth(rest, np.zeros(6), rest)
 
     def read_state(self) -> JointState:
-        """Encoder angles, noisy velocities and the measured motor torque, now."""
+        """Encoder angles, noisy velocities, measured motor torque and enabling device, now.
+
+        The enabling device only when the arm has one (``TwinConfig.enabling_device``).
+        """
+        enabling = None
+        if self.config.enabling_device:
+            enabling = self._operator_acts and self._operator.holds(self.time)
         return JointState(
             t=self.time,
             q=self.sensors.joint_position(self.data.qpos),
             qd=self.sensors.joint_velocity(self.data.qvel, self.data.qpos),
             tau_measured=self.sensors.motor_torque(self._tau_motor),
+            enabling=enabling,
         )
 
     def send_torque(self, tau: ArrayLike) -> None:

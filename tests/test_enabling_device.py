@@ -1,0 +1,127 @@
+"""The hand-guiding enabling device (``JointState.enabling``): the margin it replaces.
+
+Active mode removes the friction the model may overstate from every reading along the
+motion (the friction margin), because once the hand has let go that error reads exactly as
+a push and would run the released arm on. An enabling device says directly whether a hand
+is on the arm: held, the margin is not removed (lighter); released, nothing drives the
+admittance and no reference ahead of the arm pulls it on (it stops). Tested against the
+twin, whose hand holds the device while it holds the arm and lets go of both at once.
+"""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import leadthrough as lt
+from leadthrough.control.active_law import ActiveLaw
+from leadthrough.control.admittance import AdmittanceState
+from leadthrough.experiments.guiding import Case, run_case
+from leadthrough.friction.model import FrictionModel
+from leadthrough.twin.operator import During, Hand
+from leadthrough.twin.paths import Line
+from leadthrough.twin.plants import PlantRanges
+from leadthrough.twin.simulator import DigitalTwin, TwinConfig
+
+#: Without the friction margin and without a release read, this released arm ran away (the
+#: device read held after the hand let go: 417 rad, braked at the joints' speed limits).
+RELEASED_ON_THE_WAY = Case("dry", 4, "relaxed", "upwards", PlantRanges(enabling_device=True))
+WITHOUT_A_DEVICE = dataclasses.replace(RELEASED_ON_THE_WAY, ranges=PlantRanges())
+
+
+@pytest.fixture(scope="module")
+def yumi():
+    """The YuMi's arm."""
+    return lt.robots.yumi()
+
+
+def _law(robot, compiled=True):
+    law = ActiveLaw(robot, lt.LeadThroughParameters(), 0.004, FrictionModel.from_robot(robot))
+    law.compiled = compiled
+    return law
+
+
+def test_the_twin_reports_the_device_held_while_the_hand_holds(yumi):
+    """Held from the grab until the hand lets go; None on an arm without a device."""
+    twin = DigitalTwin(yumi, TwinConfig(enabling_device=True))
+    assert twin.read_state().enabling is False  # nobody holds the arm
+    start = twin.truth.flange_pose[:3, 3].copy()
+    twin.operator = During(Hand(Line(start, start + np.array([0.0, 0.0, 0.1]), 2.0)), 0.0, 0.02)
+    held = []
+    for _ in range(10):
+        held.append(twin.read_state().enabling)
+        twin.send_torque(np.zeros(yumi.n_joints))
+    assert held[:5] == [True] * 5 and held[5:] == [False] * 5  # let go at 20 ms
+    assert DigitalTwin(yumi, TwinConfig()).read_state().enabling is None  # no device
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_held_the_friction_margin_is_not_removed(yumi, compiled):
+    """Held, the margin is 0 wherever the level's error goes; released, it is back."""
+    law = _law(yumi, compiled)
+    whole = law.friction_error.copy()
+    law.use_enabling(True)
+    law.set_friction_error(whole * 1.5)  # a calibrated level's error follows the travel
+    assert np.all(law.margin_error == 0.0) and np.all(law.viscous_margin_error == 0.0)
+    law.use_enabling(False)  # let go: the margin is back for the next grab
+    np.testing.assert_array_equal(law.margin_error, 1.5 * whole)
+    np.testing.assert_array_equal(law.viscous_margin_error, whole)
+    law.use_enabling(None)
+    np.testing.assert_array_equal(law.margin_error, 1.5 * whole)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_released_nothing_drives_the_admittance_and_no_reference_leads(yumi, compiled):
+    """Released, a push reads as none and the reference 50 mrad ahead is where the arm is."""
+    n, q, qd = yumi.n_joints, yumi.home(), np.full(yumi.n_joints, 0.2)
+    mass = lt.Dynamics(yumi).mass(q)
+    constraint = np.zeros(n)
+
+    def after(enabling, drive):
+        law = _law(yumi, compiled)
+        law.use_enabling(enabling)
+        law.references = AdmittanceState(q + 0.05, qd.copy())  # a reference 50 mrad ahead
+        law.drive[:], law.residual[:], law.uncertainty[:] = drive, drive, 0.1
+        return law.tracking(q, qd, constraint, mass).copy(), law.references
+
+    pushed, _ = after(None, 2.0)
+    released, references = after(False, 2.0)
+    unpushed, _ = after(False, 0.0)
+    np.testing.assert_array_equal(released, unpushed)  # the push reads as none
+    assert np.all(np.abs(references.q_ref - q) < 0.002)  # from where it is, not 50 mrad on
+    assert released @ qd < 0.0 < pushed @ qd  # it brakes the motion (its power)
+
+
+@pytest.fixture(scope="module")
+def released_with_the_device():
+    """The case with the device, active mode."""
+    return run_case(RELEASED_ON_THE_WAY, "active")
+
+
+def test_a_released_arm_stops_with_no_margin_while_held(released_with_the_device):
+    """Guided without the margin, let go of, the arm stops within the issue's bounds."""
+    result = released_with_the_device
+    assert result.stop_time <= 0.5 and result.drift < 1e-3
+
+
+def test_released_no_reference_pulls_the_arm_on(monkeypatch):
+    """As found: the reference left where the admittance had run it kept the arm going."""
+    case = dataclasses.replace(RELEASED_ON_THE_WAY, seed=3)
+    stopped = run_case(case, "active").stop_time
+    monkeypatch.setattr(ActiveLaw, "_released", lambda law, q: law._no_push)
+    assert stopped <= 0.25 < run_case(case, "active").stop_time
+
+
+def test_without_the_release_it_runs_on(monkeypatch, released_with_the_device):
+    """As found: a device read held after the hand let go leaves no margin to stop it."""
+    use = ActiveLaw.use_enabling
+    monkeypatch.setattr(ActiveLaw, "use_enabling",
+                        lambda law, enabling: use(law, enabling is not None))  # fmt: skip
+    result = run_case(RELEASED_ON_THE_WAY, "active")
+    assert result.drift > 0.01 > released_with_the_device.drift
+
+
+def test_held_it_guides_lighter(released_with_the_device):
+    """The margin's cost: the same hand on the same plant pulls harder without a device."""
+    without = run_case(WITHOUT_A_DEVICE, "active")
+    assert released_with_the_device.rms_force <= 0.9 * without.rms_force
