@@ -55,6 +55,25 @@ def test_the_twin_reports_the_device_held_while_the_hand_holds(yumi):
     assert DigitalTwin(yumi, TwinConfig()).read_state().enabling is None  # no device
 
 
+@pytest.mark.parametrize("reading", [np.nan, "yes", 0.5, 2])
+def test_a_malformed_reading_stops_the_arm(yumi, reading):
+    """A device reading that is not held / released / absent: a fault naming it, the safe stop."""
+    ctl = lt.LeadThrough(yumi, mode="active")
+    q, qd = yumi.home(), np.zeros(yumi.n_joints)
+    ctl.step(lt.JointState(0.0, q, qd, None, enabling=True))
+    command = ctl.step(lt.JointState(0.004, q, qd, None, enabling=reading))
+    assert ctl.state == "fault" and "enabling device reading" in ctl.supervisor.fault_reason
+    assert np.all(np.isfinite(command))
+
+
+@pytest.mark.parametrize("reading", [True, np.True_, 1, False, np.False_, 0])
+def test_a_digital_input_reads_as_held_or_released(yumi, reading):
+    """A bool, a NumPy bool or 0 / 1, as a driver's digital input gives it."""
+    ctl = lt.LeadThrough(yumi, mode="active")
+    ctl.step(lt.JointState(0.0, yumi.home(), np.zeros(yumi.n_joints), None, enabling=reading))
+    assert ctl.state == "teaching" and ctl.law.enabling is bool(reading)
+
+
 @pytest.mark.parametrize("compiled", [True, False])
 def test_held_the_friction_margin_is_not_removed(yumi, compiled):
     """Held, the margin is 0 wherever the level's error goes; released, it is back."""

@@ -56,7 +56,7 @@ from leadthrough.estimation.tool_force import ToolForceFusion
 from leadthrough.estimation.wrench import ToolWrench, tool_wrench
 from leadthrough.friction.measured_level import MeasuredLevelError
 from leadthrough.friction.model import FrictionModel
-from leadthrough.logs.sample import JointState, joint_state
+from leadthrough.logs.sample import JointState, enabling_state, joint_state
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.model.snapshot import ModelSnapshot
@@ -443,7 +443,11 @@ class LeadThrough:
             self._own_clock += self.dt
         sample = joint_state(state, qd, tau, self._own_clock)
         self._t = float(sample.t)
-        self._enabling = sample.enabling
+        try:
+            self._enabling = enabling_state(sample.enabling)
+        except ValueError as error:  # a reading nobody can trust: the safe stop
+            self._enabling = False
+            self.supervisor.stop(str(error), self._t)
         return self._t, sample.q, sample.qd, sample.tau_measured
 
     def _send(self, command: FloatArray, dither: FloatArray) -> FloatArray:

@@ -63,3 +63,18 @@ def joint_state(
         raise ParameterError("step", "needs a JointState, or q and qd")
     tau = None if tau_measured is None else np.asarray(tau_measured, dtype=float)
     return JointState(t, np.asarray(state, dtype=float), np.asarray(qd, dtype=float), tau)
+
+
+def enabling_state(value: object) -> bool | None:
+    """A sample's enabling device as True (held), False (released) or None (no device).
+
+    A driver may give its digital input as a bool, a NumPy bool or 0 / 1.
+
+    Raises:
+        ValueError: Anything else (NaN, a string, 0.5): one line naming the value.
+    """
+    if value is None:
+        return None
+    if isinstance(value, bool | np.bool_ | int | np.integer) and value in (0, 1):
+        return bool(value)
+    raise ValueError(f"enabling device reading {value!r} is not True, False or None")
