@@ -143,6 +143,7 @@ class ActiveLaw:
         self._terms = np.zeros((4, self.n))  # the friction terms of a period (terms_into)
         self._term_rows = tuple(self._terms)  # its rows (views), for the compiled drive
         self.enabling: bool | None = None
+        self._let_go = False  # the device was released this period
         self._no_push = np.zeros(self.n)  # what drives the admittance while released
         self._margin_applied = self.margin_share  # 0 while the enabling device is held
         self.use_friction(nominal_friction)
@@ -208,11 +209,12 @@ class ActiveLaw:
           weight still scales every reading by the model's uncertainty.
         - released (False): nobody guides. No push drives the admittance
           (:meth:`tracking`; :attr:`drive` stays the readout), so its damping rises to
-          the rest damping, and its position reference stays where the arm is: the PD
-          stores no push from the motion to pull the arm on with, and the arm stops. The
-          margin is back for the next grab.
+          the rest damping, and its position reference is put where the arm is when it
+          is let go: the PD stores no push from the motion to pull the arm on with, and
+          the arm stops. The margin is back for the next grab.
         - None (no device): the margin guarantees the stop, as without this.
         """
+        self._let_go = enabling is False and self.enabling is not False
         self.enabling = enabling
         applied = 0.0 if enabling else self.margin_share
         if applied != self._margin_applied:
@@ -326,13 +328,15 @@ class ActiveLaw:
         return self.feedback
 
     def _released(self, q: FloatArray) -> FloatArray:
-        """The enabling device released: no push, and the position reference where the arm is.
+        """The enabling device released: no push, the reference where the arm was let go.
 
         Nobody guides, whatever the observer reads; and a reference the admittance ran
         ahead of the arm would have the PD's spring pull it on after the hand let go
-        (over ``K_D / K_P`` ≈ 0.5 s, until ``settle_time`` draws it back).
+        (over ``K_D / K_P`` ≈ 0.5 s, until ``settle_time`` draws it back). Once only: from
+        then on the PD holds the arm where it was let go, as at any rest.
         """
-        self.references.q_ref[:] = q  # type: ignore[union-attr]
+        if self._let_go:
+            self.references.q_ref[:] = q  # type: ignore[union-attr]
         return self._no_push
 
     def _update_drive(
