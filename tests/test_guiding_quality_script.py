@@ -73,6 +73,19 @@ def test_a_wider_plant_family_reaches_every_case_and_a_bad_setting_is_a_one_line
         assert says in capsys.readouterr().err.strip().splitlines()[-1]
 
 
+def test_the_enabling_device_is_a_switch_not_a_range(capsys):
+    """``--enabling-device`` gives the plants one; ``--plants`` takes ranges only."""
+    from leadthrough.model import robots
+    from leadthrough.twin.plants import PlantRanges, sample_plant
+
+    with_device = PlantRanges(enabling_device=True)
+    assert sample_plant(robots.yumi(), 1, "dry", with_device).config.enabling_device
+    assert not sample_plant(robots.yumi(), 1, "dry").config.enabling_device
+    with pytest.raises(SystemExit):
+        guiding_quality.main(["--plants", "enabling_device=1"])
+    assert "unknown field 'enabling_device'" in capsys.readouterr().err
+
+
 def test_a_control_period_the_twin_cannot_run_is_a_one_line_error(capsys):
     """``--dt`` sets the plants' and controllers' period; one the twin cannot run is refused."""
     for dt, says in (("0.0013", "--dt: control_dt 0.0013 is not a multiple of physics_dt"),
