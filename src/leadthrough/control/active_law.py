@@ -46,6 +46,7 @@ from leadthrough.control.admittance import (
 )
 from leadthrough.control.bias import ModelErrorBias
 from leadthrough.control.fused import (
+    ADMITTANCE_SCALARS,
     admittance_law,
     operator_drive,
     rest_narrowing,
@@ -56,6 +57,8 @@ from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
 
 BoolArray = NDArray[np.bool_]
+#: Where the compiled admittance reads the rest damping's scale (``rest_damping``).
+_REST_DAMPING = ADMITTANCE_SCALARS.index("rest_damping")
 
 
 class ActiveLaw:
@@ -73,7 +76,9 @@ class ActiveLaw:
             model's, or ``friction_uncertainty``; at least ``stiction_margin``).
         margin_error: The relative error the friction margin removes of the Coulomb
             part [–] (:meth:`_friction_margin`): :attr:`margin_share` of
-            :attr:`friction_error`.
+            :attr:`friction_error` (0 while the enabling device is held).
+        enabling: The enabling device this period (:meth:`use_enabling`): True held,
+            False released, None without one.
         viscous_margin_error: The same of the viscous part [–]: that of the friction
             model in use (:meth:`use_friction`), which a reading of the level at one
             speed does not narrow (:meth:`set_friction_error` leaves it).
@@ -204,18 +209,27 @@ class ActiveLaw:
         motion would (README, *Where the effort goes*). An enabling device says directly
         whether a hand is on the arm, so:
 
-        - held (True): the margin is not removed (:attr:`margin_error` 0). The level's
-          error then passes as assist, which the hand that holds the arm resists; the
-          weight still scales every reading by the model's uncertainty.
+        - held (True): the margin is not subtracted (:attr:`margin_error` 0), and the
+          virtual damping stays at its guiding value instead of rising where nothing
+          starts or sustains a joint's motion (``rest_damping``, there so that a released
+          arm stops and model error that leaks through moves it slower). The level's
+          error then passes as assist, which the hand on the arm resists; the weight
+          still scales every reading by the model's uncertainty. So the device must be
+          one that only a hand on the arm can hold (on the tool or a handle): held with
+          nobody at the arm, the law has nothing to stop it.
         - released (False): nobody guides. No push drives the admittance
-          (:meth:`tracking`; :attr:`drive` stays the readout), so its damping rises to
-          the rest damping, and its position reference is put where the arm is when it
-          is let go: the PD stores no push from the motion to pull the arm on with, and
-          the arm stops. The margin is back for the next grab.
+          (:meth:`tracking`; :attr:`drive` stays the readout; the virtual constraints
+          still act), so its damping rises to the rest damping; in the period it is let
+          go the push averaged over ``push_time`` is forgotten and the position reference
+          put where the arm is: the PD stores no push from the motion to pull the arm on
+          with, and the arm stops. The margin is back for the next grab.
         - None (no device): the margin guarantees the stop, as without this.
         """
         self._let_go = enabling is False and self.enabling is not False
         self.enabling = enabling
+        # held, the damping stays at guiding: it rises where nothing pushes for the same
+        # reason the margin is there, a released arm
+        self._admittance_scalars[_REST_DAMPING] = 0.0 if enabling else self.parameters.rest_damping
         applied = 0.0 if enabling else self.margin_share
         if applied != self._margin_applied:
             self._margin_applied = applied
@@ -332,11 +346,15 @@ class ActiveLaw:
 
         Nobody guides, whatever the observer reads; and a reference the admittance ran
         ahead of the arm would have the PD's spring pull it on after the hand let go
-        (over ``K_D / K_P`` ≈ 0.5 s, until ``settle_time`` draws it back). Once only: from
-        then on the PD holds the arm where it was let go, as at any rest.
+        (over ``K_D / K_P`` ≈ 0.5 s, until ``settle_time`` draws it back), as the push
+        averaged over ``push_time`` would keep the damping at guiding and the
+        compensation following the push for that long. Once only: from then on the PD
+        holds the arm where it was let go, as at any rest.
         """
         if self._let_go:
             self.references.q_ref[:] = q  # type: ignore[union-attr]
+            self.sustained[:] = 0.0
+            self.signed_weight[:] = 0.0
         return self._no_push
 
     def _update_drive(
@@ -419,7 +437,8 @@ class ActiveLaw:
         q_ref = settled_reference(references.q_ref, q, moving, self.damping_weight,
                                   self._settle_rate)  # fmt: skip
         references = AdmittanceState(q_ref, references.qd_ref)
-        damping = virtual_damping(inertia, p.damping_time, p.rest_damping, self.damping_weight)
+        rest = self._admittance_scalars[_REST_DAMPING]  # 0 while the device is held
+        damping = virtual_damping(inertia, p.damping_time, rest, self.damping_weight)
         velocity = admittance_step(references, drive, mass, p.inertia_scale, damping,
                                    self.dt).qd_ref  # fmt: skip
         if p.limit_aware:

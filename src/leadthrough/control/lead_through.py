@@ -556,7 +556,7 @@ class LeadThrough:
     ) -> tuple[FloatArray, FloatArray]:
         """The guiding command [Nm] and the dither it holds [Nm]."""
         q, qd = model.q, model.qd
-        self.law.use_enabling(self._enabling)  # before the level error scales the margin
+        self.law.use_enabling(self._enabling)  # held: no friction margin (either order)
         if self.level_error is not None:
             self._follow_level_error(q)
         applied, dither = self._measured(tau_measured)

@@ -26,9 +26,11 @@ class JointState:
         qd: Joint velocities as the robot reports them (noisy) [rad/s], shape (n,).
         tau_measured: Motor torque actually applied, as measured, arm side [Nm], shape (n,),
             or None for a robot that measures none.
-        enabling: The hand-guiding enabling device (the button on the tool or the
-            pendant that ISO 10218-1 asks of hand guiding), as the robot reports it: True
-            while it is held, False while it is released, None for a robot without one.
+        enabling: The hand-guiding enabling device that ISO 10218-1 asks of hand
+            guiding, as the robot reports it: True while it is held, False while it is
+            released, None for a robot without one. One that only a hand on the arm can
+            hold (a button on the tool or a handle), not a pendant's: held, active mode
+            relies on that hand (``ActiveLaw.use_enabling``).
     """
 
     t: float
@@ -68,10 +70,10 @@ def joint_state(
 def enabling_state(value: object) -> bool | None:
     """A sample's enabling device as True (held), False (released) or None (no device).
 
-    A driver may give its digital input as a bool, a NumPy bool or 0 / 1.
+    A driver may give its digital input as a bool, a NumPy bool or the integers 0 / 1.
 
     Raises:
-        ValueError: Anything else (NaN, a string, 0.5): one line naming the value.
+        ValueError: Anything else (a float, even 1.0; NaN, a string): one line naming it.
     """
     if value is None:
         return None

@@ -63,6 +63,10 @@ class ScriptedOperator(Operator):
         action, operator = active
         return operator.wrench(t - action.start, flange_pose, flange_velocity)
 
+    def holds(self, t: float) -> bool:
+        """Whether an action is under way at ``t`` (nobody holds the arm in between)."""
+        return any(a.start <= t < a.stop for a in self.actions)
+
     def joint_torque(self, t: float, q: FloatArray, qd: FloatArray) -> FloatArray:
         """Joint torque of the action under way (zero between actions)."""
         self._q = np.asarray(q, dtype=float).copy()
