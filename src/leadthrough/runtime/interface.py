@@ -7,9 +7,13 @@ controller object runs in tests, against the twin and on a robot::
 
     state = robot.read_state()
     while running:
-        tau = controller.step(state.q, state.qd, state.tau_measured)
-        robot.send_torque(tau)      # returns when the next state is due
+        tau = controller.step(state)  # or step(state.q, state.qd, state.tau_measured)
+        robot.send_torque(tau)        # returns when the next state is due
         state = robot.read_state()
+
+``step(state)`` (``LeadThrough``'s, as :func:`~leadthrough.runtime.loop.control_loop`
+calls it) takes the robot's time stamp and enabling device with it; the positional form
+has neither.
 """
 
 from __future__ import annotations
