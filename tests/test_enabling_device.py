@@ -18,7 +18,7 @@ from leadthrough.control.active_law import _REST_DAMPING, ActiveLaw
 from leadthrough.control.admittance import AdmittanceState
 from leadthrough.experiments.guiding import Case, run_case
 from leadthrough.friction.model import FrictionModel
-from leadthrough.twin.operator import During, Hand
+from leadthrough.twin.operator import During, Hand, Operator
 from leadthrough.twin.paths import Line
 from leadthrough.twin.plants import PlantRanges
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig
@@ -26,7 +26,8 @@ from leadthrough.twin.simulator import DigitalTwin, TwinConfig
 #: Without the friction margin and without a release read (the device read held after the
 #: hand let go), this released arm ran on 788 mrad in 5.5 s.
 RELEASED_ON_THE_WAY = Case("dry", 2, "stiff", "upwards", PlantRanges(enabling_device=True))
-#: Released, the admittance had run its reference ahead of this arm: coasted 0.44 s.
+#: Released keeping what the motion stored (the reference the admittance ran ahead of the
+#: arm, the push averaged over push_time), this arm coasted 0.37 s.
 REFERENCE_AHEAD = Case("dry", 3, "relaxed", "upwards", PlantRanges(enabling_device=True))
 WITHOUT_A_DEVICE = dataclasses.replace(RELEASED_ON_THE_WAY, ranges=PlantRanges())
 
@@ -113,6 +114,45 @@ def test_released_nothing_drives_the_admittance_and_no_reference_leads(yumi, com
     assert released @ qd < 0.0 < pushed @ qd  # it brakes the motion (its power)
 
 
+@pytest.mark.parametrize("compiled", [True, False])
+def test_let_go_the_averaged_push_is_forgotten(yumi, compiled):
+    """The push averaged over push_time while guiding is gone the period the device is let go."""
+    n, q, qd = yumi.n_joints, yumi.home(), np.full(yumi.n_joints, 0.2)
+    mass = lt.Dynamics(yumi).mass(q)
+    law = _law(yumi, compiled)
+    law.use_enabling(True)
+    law.sustained[:], law.signed_weight[:] = 1.0, 0.9  # a hand that pushed along the motion
+    law.use_enabling(False)
+    law.tracking(q, qd, np.zeros(n), mass)
+    assert np.all(law.sustained == 0.0) and np.all(law.signed_weight == 0.0)
+
+
+@pytest.mark.parametrize("drive", [0.0, 0.05, 1.0])
+def test_held_the_numpy_law_damps_as_the_compiled_one(yumi, drive):
+    """Both read the held damping from the same place: their references agree."""
+    n, q, qd = yumi.n_joints, yumi.home(), np.full(yumi.n_joints, 0.1)
+    mass = lt.Dynamics(yumi).mass(q)
+    laws = [_law(yumi, compiled) for compiled in (True, False)]
+    for law in laws:
+        law.use_enabling(True)
+        for _ in range(20):
+            law.drive[:], law.residual[:], law.uncertainty[:] = drive, drive, 0.1
+            law.tracking(q, qd, np.zeros(n), mass)
+    np.testing.assert_allclose(laws[0].references.qd_ref, laws[1].references.qd_ref,
+                               rtol=1e-9, atol=1e-12)  # fmt: skip
+    np.testing.assert_allclose(laws[0].feedback, laws[1].feedback, rtol=1e-9, atol=1e-12)
+
+
+def test_the_scripted_session_holds_the_device_during_its_actions_only():
+    """Between the teaching session's actions nobody holds the arm, nor its device."""
+    from leadthrough.twin.session_operator import Action, ScriptedOperator
+
+    still = Action(1.0, 2.0, lambda p, q: Operator(), "hold")
+    operator = ScriptedOperator([still, Action(3.0, 4.0, still.make, "again")])
+    assert [operator.holds(t) for t in (0.5, 1.0, 1.99, 2.0, 2.5, 3.5, 4.0)] == [
+        False, True, True, False, False, True, False]  # fmt: skip
+
+
 def test_held_the_damping_does_not_rise(yumi):
     """Held, the damping stays at guiding; released or without a device it rises as before."""
     law = _law(yumi)
@@ -151,8 +191,12 @@ def test_a_released_arm_stops_with_no_margin_while_held(released_with_the_device
     assert result.stop_time <= 0.5 and result.drift < 1e-3
 
 
-def test_released_no_reference_pulls_the_arm_on(monkeypatch):
-    """As found: the reference left where the admittance had run it kept the arm going."""
+def test_let_go_nothing_the_motion_stored_carries_the_arm_on(monkeypatch):
+    """As found: what the motion stored, kept when the device was let go, carried the arm on.
+
+    The reference the admittance ran ahead of the arm and the push averaged over push_time;
+    either one forgotten alone stops it about as fast as both.
+    """
     stopped = run_case(REFERENCE_AHEAD, "active").stop_time
     monkeypatch.setattr(ActiveLaw, "_released", lambda law, q: law._no_push)
     assert stopped <= 0.25 < run_case(REFERENCE_AHEAD, "active").stop_time
