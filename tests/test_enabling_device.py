@@ -74,7 +74,7 @@ def test_a_digital_input_reads_as_held_or_released(yumi, reading):
     """A bool, a NumPy bool or 0 / 1, as a driver's digital input gives it."""
     ctl = lt.LeadThrough(yumi, mode="active")
     ctl.step(lt.JointState(0.0, yumi.home(), np.zeros(yumi.n_joints), None, enabling=reading))
-    assert ctl.state == "teaching" and ctl.law.enabling is bool(reading)
+    assert ctl.state == "teaching" and ctl.law.enabling is ctl.enabling is bool(reading)
 
 
 @pytest.mark.parametrize("compiled", [True, False])

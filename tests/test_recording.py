@@ -259,3 +259,15 @@ def test_missing_file_raises_recording_error(tmp_path):
     """A missing file raises a RecordingError naming it."""
     with pytest.raises(RecordingError, match=r"missing\.mcap: cannot read"):
         read_recording(tmp_path / "missing.mcap")
+
+
+def test_the_enabling_device_reads_back_and_is_absent_without_one(robot, tmp_path):
+    """Held / released per period as the sample gave it; None where no device was read."""
+    path = tmp_path / "device.mcap"
+    n, states = robot.n_joints, [True, False, None]
+    with SessionRecorder(path, robot, {}) as recorder:
+        for k, enabling in enumerate(states):
+            zeros = np.zeros(n)
+            recorder.record(0.004 * k, zeros, zeros, zeros, zeros, zeros, "active", "teaching",
+                            enabling=enabling)  # fmt: skip
+    assert read_recording(path).enabling == states

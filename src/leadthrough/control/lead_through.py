@@ -288,6 +288,15 @@ class LeadThrough:
         return np.zeros(self.robot.n_joints) if offset is None else offset.copy()
 
     @property
+    def enabling(self) -> bool | None:
+        """The enabling device in the latest sample (``JointState.enabling``).
+
+        True held, False released (and after a reading that was neither, which faulted),
+        None for an arm without one.
+        """
+        return self._enabling
+
+    @property
     def state(self) -> SupervisorState:
         """Supervisor state: teaching, holding or fault."""
         return self.supervisor.state

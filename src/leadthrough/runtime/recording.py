@@ -78,7 +78,9 @@ JOINT_STATE_SCHEMA["properties"] |= {  # optional: files written before have no 
     "tool_wrench": _NUMBERS | {"description": "tool wrench at the TCP, world axes [N, Nm]"},
     "tool_wrench_covariance": _NUMBERS
     | {"description": "its covariance, 6×6 row-major [N², N Nm, Nm²]"},
-}
+    "enabling": {"type": ["boolean", "null"],
+                 "description": "the enabling device: held, released, or null without one"},
+}  # fmt: skip
 EVENT_SCHEMA = _schema("leadthrough.Event", t=_TIME, kind=_TEXT, detail=_TEXT)
 #: What a damaged file can make the MCAP stream reader raise.
 _READ_ERRORS = (McapError, ValueError, struct.error, zstandard.ZstdError)
@@ -155,6 +157,7 @@ class SessionRecorder:
         mode: str,
         state: str,
         tool_wrench: ToolWrench | None = None,
+        enabling: bool | None = None,
     ) -> None:
         """Record one control period.
 
@@ -169,14 +172,18 @@ class SessionRecorder:
             state: Safety supervisor state, e.g. ``"teaching"``.
             tool_wrench: Estimated wrench at the TCP with its covariance
                 (``LeadThrough.tool_wrench``), if any.
+            enabling: The sample's enabling device (``JointState.enabling``): True
+                held, False released, None for an arm without one (not written).
         """
         values = (q, qd, tau, tau_ext_hat, tau_ext_std)
-        fields = {
+        fields: dict[str, Any] = {
             name: self._numbers(name, value) for name, value in zip(ARRAYS, values, strict=True)
         }
         if tool_wrench is not None:
             fields["tool_wrench"] = _finite_or_null(tool_wrench.vector)
             fields["tool_wrench_covariance"] = _finite_or_null(tool_wrench.covariance.ravel())
+        if enabling is not None:
+            fields["enabling"] = bool(enabling)
         self._write(self._joint_state, t, fields | {"mode": str(mode), "state": str(state)})
 
     def event(self, t: float, kind: str, detail: str) -> None:
@@ -263,6 +270,8 @@ class Recording:
             not recorded.
         recovery: Empty if complete; else one line saying how much was recovered (of how
             much, when the file's summary survived) and where the file stops being readable.
+        enabling: The enabling device of each period: True held, False released, None
+            for an arm without one (and in files written before it was recorded).
     """
 
     t: FloatArray
@@ -282,6 +291,7 @@ class Recording:
     recovery: str = ""
     tool_wrench: FloatArray = field(default_factory=lambda: np.zeros((0, 6)))
     tool_wrench_covariance: FloatArray = field(default_factory=lambda: np.zeros((0, 6, 6)))
+    enabling: list[bool | None] = field(default_factory=list)
 
 
 def read_recording(path: str | os.PathLike[str]) -> Recording:
@@ -393,6 +403,7 @@ def _assemble(records: list[Any], complete: bool) -> Recording:
         tool_wrench_covariance=_frozen(
             [s.get("tool_wrench_covariance", [None] * 36) for s in states], (len(states), 6, 6)
         ),
+        enabling=[s.get("enabling") for s in states],
     )
 
 

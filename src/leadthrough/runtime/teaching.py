@@ -64,7 +64,7 @@ class TeachingSession:
             n = len(state.q)
             tau = np.full(n, np.nan) if state.tau_measured is None else state.tau_measured
             self.recorder.record(self.time, state.q, state.qd, tau, c.tau_ext_hat, c.std, c.mode,
-                                 c.state.value, c.tool_wrench)  # fmt: skip
+                                 c.state.value, c.tool_wrench, c.enabling)  # fmt: skip
             self.recorded += 1
         self.record_events()
         return command
