@@ -148,7 +148,6 @@ class ActiveLaw:
         self._terms = np.zeros((4, self.n))  # the friction terms of a period (terms_into)
         self._term_rows = tuple(self._terms)  # its rows (views), for the compiled drive
         self.enabling: bool | None = None
-        self._let_go = False  # the device was released this period
         self._no_push = np.zeros(self.n)  # what drives the admittance while released
         self._margin_applied = self.margin_share  # 0 while the enabling device is held
         self.use_friction(nominal_friction)
@@ -219,13 +218,11 @@ class ActiveLaw:
           nobody at the arm, the law has nothing to stop it.
         - released (False): nobody guides. No push drives the admittance
           (:meth:`tracking`; :attr:`drive` stays the readout; the virtual constraints
-          still act), so its damping rises to the rest damping; in the period it is let
-          go the push averaged over ``push_time`` is forgotten and the position reference
-          put where the arm is: the PD stores no push from the motion to pull the arm on
-          with, and the arm stops. The margin is back for the next grab.
+          still act), so its damping rises to the rest damping and the arm stops (the
+          controller sends no Coulomb compensation then: ``LeadThrough``). The margin is
+          back for the next grab.
         - None (no device): the margin guarantees the stop, as without this.
         """
-        self._let_go = enabling is False and self.enabling is not False
         self.enabling = enabling
         # held, the damping stays at guiding: it rises where nothing pushes for the same
         # reason the margin is there, a released arm
@@ -331,8 +328,8 @@ class ActiveLaw:
         if self.references is None:
             self.references = AdmittanceState(q.copy(), qd.copy())
         references = self.references
-        if self.enabling is False:
-            drive = residual = self._released(q)
+        if self.enabling is False:  # released: nobody guides, whatever the observer reads
+            drive = residual = self._no_push
         if not self.compiled:
             return self._admittance(q, qd, drive + constraint, mass, residual + constraint)
         admittance_law(q, qd, drive, constraint, mass, residual, self.uncertainty,
@@ -340,22 +337,6 @@ class ActiveLaw:
                        references.qd_ref, self.sustained, self.damping_weight,
                        self.signed_weight, self.feedback, self._work)  # fmt: skip
         return self.feedback
-
-    def _released(self, q: FloatArray) -> FloatArray:
-        """The enabling device released: no push, the reference where the arm was let go.
-
-        Nobody guides, whatever the observer reads; and a reference the admittance ran
-        ahead of the arm would have the PD's spring pull it on after the hand let go
-        (over ``K_D / K_P`` ≈ 0.5 s, until ``settle_time`` draws it back), as the push
-        averaged over ``push_time`` would keep the damping at guiding and the
-        compensation following the push for that long. Once only: from then on the PD
-        holds the arm where it was let go, as at any rest.
-        """
-        if self._let_go:
-            self.references.q_ref[:] = q  # type: ignore[union-attr]
-            self.sustained[:] = 0.0
-            self.signed_weight[:] = 0.0
-        return self._no_push
 
     def _update_drive(
         self, estimate: FloatArray, q: FloatArray, qd: FloatArray, gravity: FloatArray

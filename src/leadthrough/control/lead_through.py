@@ -334,6 +334,7 @@ class LeadThrough:
         n = self.robot.n_joints
         self.law.reset()
         self._no_constraint = np.zeros(n)  # the constraint torque without constraints [Nm]
+        self._no_dither = np.zeros(n)  # the dither sent while the device is released [Nm]
         self._no_gravity_reference = np.zeros(n)  # G_cal without a calibration [Nm]
         self._ripple_std = np.zeros(n)  # the drives' ripple on the last motor torque [Nm]
         self._sent = DelayLine((2, n), p.measurement_delay)  # (command, its dither) [Nm]
@@ -565,7 +566,7 @@ class LeadThrough:
     ) -> tuple[FloatArray, FloatArray]:
         """The guiding command [Nm] and the dither it holds [Nm]."""
         q, qd = model.q, model.qd
-        self.law.use_enabling(self._enabling)  # held: no friction margin (either order)
+        self.law.use_enabling(self._law_enabling())
         if self.level_error is not None:
             self._follow_level_error(q)
         applied, dither = self._measured(tau_measured)
@@ -585,16 +586,45 @@ class LeadThrough:
         if self.constraints:
             constraint, _ = constraint_torque(self.constraints, self.dynamics, q, qd, model)
         if self.mode == "passive":
-            feed_forward = self._feed_forward(t, model, None)
-            torque = feed_forward.total
-            return (torque + constraint if self.constraints else torque), feed_forward.dither
+            torque, dither = self._for_the_hand(self._feed_forward(t, model, None))
+            return (torque + constraint if self.constraints else torque), dither
         self._stage = "admittance"
         tracking = self.law.tracking(q, qd, constraint, model.mass)
         # follow_push: a joint below its compensation's velocity ramp is compensated as
         # surely, and in the direction, as the admittance reads a push on it
         push = self.law.signed_weight if self.follows_push else None
-        feed_forward = self._feed_forward(t, model, push)
-        return feed_forward.total + tracking, feed_forward.dither
+        torque, dither = self._for_the_hand(self._feed_forward(t, model, push))
+        return torque + tracking, dither
+
+    def _law_enabling(self) -> bool | None:
+        """The enabling device as the active law takes it (``ActiveLaw.use_enabling``).
+
+        Released, always: nobody guides. Held, the law lets go of what it keeps for a
+        released arm (the friction margin, the damping that rises) only on a model whose
+        friction a start-up calibration measured on this arm, as the compensation follows
+        the push only there (:attr:`follows_push`): unmeasured, the levels may be off by far
+        more than their stated error (0.5–1.5 of the model's refused 4 of 8 plants'
+        calibrations, and held without the margin those plants shook up to 2.1× passive).
+        """
+        if self._enabling and not self._calibrated:
+            return None
+        return self._enabling
+
+    def _for_the_hand(self, feed_forward: FeedForwardTorques) -> tuple[FloatArray, FloatArray]:
+        """The feed-forward and its dither; gravity alone while the device is released.
+
+        The Coulomb compensation and the dither are there for the hand that guides: with
+        the device released nobody does, and compensation of a level the model overstates
+        would carry the arm on (levels 0.5 of the model's, uncalibrated: 0.96 rad).
+        """
+        if self._enabling is False:
+            return feed_forward.gravity, self._no_dither
+        return feed_forward.total, feed_forward.dither
+
+    @property
+    def _calibrated(self) -> bool:
+        """Whether a start-up calibration was accepted (the model's friction measured)."""
+        return self.calibration is not None and self.calibration.accepted
 
     @property
     def follows_push(self) -> bool:
@@ -604,9 +634,8 @@ class LeadThrough:
         (the default) ``"calibrated"``, once a start-up calibration has been accepted.
         """
         setting = self.parameters.compensation.follow_push
-        calibrated = self.calibration is not None and self.calibration.accepted
         return self.mode == "active" and (
-            setting == "always" or (setting == "calibrated" and calibrated)
+            setting == "always" or (setting == "calibrated" and self._calibrated)
         )
 
     def _feed_forward(
