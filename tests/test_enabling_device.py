@@ -1,11 +1,12 @@
 """The hand-guiding enabling device (``JointState.enabling``): the margin it replaces.
 
 Active mode removes the friction the model may overstate from every reading along the
-motion (the friction margin), because once the hand has let go that error reads exactly as
-a push and would run the released arm on. An enabling device says directly whether a hand
-is on the arm: held, the margin is not removed (lighter); released, nothing drives the
-admittance and no reference ahead of the arm pulls it on (it stops). Tested against the
-twin, whose hand holds the device while it holds the arm and lets go of both at once.
+motion (the friction margin), and raises its damping where nothing pushes, because once the
+hand has let go a friction error reads exactly as a push and would run the released arm on.
+An enabling device says directly whether a hand is on the arm: held, on a calibrated model,
+neither is applied (lighter); released, nothing drives the admittance and the controller
+sends gravity alone (it stops). Tested against the twin, whose hand holds the device while
+it holds the arm and lets go of both at once.
 """
 
 import dataclasses
