@@ -226,3 +226,34 @@ def test_released_the_compensation_does_not_carry_the_arm_on(monkeypatch):
     stopped = run_case(case, "active").stop_time
     monkeypatch.setattr(lt.LeadThrough, "_for_the_hand", lambda ctl, ff: (ff.total, ff.dither))
     assert stopped <= 0.3 < run_case(case, "active").stop_time
+
+
+def test_held_while_the_arm_calibrates_refuses_the_calibration(yumi):
+    """A hand on the arm while it calibrates: refused at once, held against gravity, guided.
+
+    The calibration reads the arm alone; a held device says a hand is on it, whether or not
+    its push shows in the motion yet. Released all along, the same samples keep it running;
+    held from the sample that ends the run, it is the hand taking the arm handed over.
+    """
+    q, qd = yumi.home(), np.zeros(yumi.n_joints)
+
+    def run(held_at, periods=50):
+        ctl = lt.LeadThrough(yumi, mode="active", calibrate=True)
+        for k in range(periods):
+            command = ctl.step(lt.JointState(0.004 * k, q, qd, None, enabling=k >= held_at))
+            if not ctl.calibrating:
+                return ctl, command
+        return ctl, command
+
+    alone, _ = run(held_at=50)
+    assert alone.calibrating  # released all along: the run goes on
+    touched, command = run(held_at=30)
+    assert not touched.calibrating and not touched.calibration.accepted
+    assert "enabling device was held" in touched.calibration.reason
+    assert "\n" not in touched.calibration.reason
+    np.testing.assert_allclose(command, touched.model.gravity, atol=1e-12)
+    assert touched.state == "teaching"  # guiding goes on, with the model as given
+    # grabbed on the sample that ends the run (the hand takes the arm as it is handed over)
+    end = round(alone.calibration_time / 0.004)
+    handed_over, _ = run(held_at=end, periods=end + 2)
+    assert not handed_over.calibrating and "enabling" not in handed_over.calibration.reason

@@ -693,6 +693,16 @@ class CalibrationRun:
                                 "calibration motion: was the arm touched? Its friction not "
                                 "trusted")  # fmt: skip
 
+    def interrupt(self, reason: str) -> None:
+        """Stop the run for ``reason`` (the first disturbance is the one kept).
+
+        Something outside the motion said the arm is not alone (an enabling device held:
+        a hand is on it): the run is refused with ``reason``, every level left as the
+        model gives it, as for a push that stopped the run early.
+        """
+        if self.disturbance is None:
+            self.disturbance = reason
+
     def record(
         self, t: float, q: FloatArray, tau: FloatArray, discrepancy: FloatArray | None = None
     ) -> None:

@@ -63,6 +63,11 @@ from leadthrough.model.snapshot import ModelSnapshot
 from leadthrough.safety.supervisor import SafetySupervisor, SupervisorState
 from leadthrough.validation import real
 
+#: Why a calibration stops when the enabling device is held while it runs: the device is
+#: one only a hand on the arm can hold, and the calibration reads the arm alone.
+HELD_WHILE_CALIBRATING = ("the enabling device was held while the arm calibrated: was the "
+                          "arm touched? Nobody may touch it")  # fmt: skip
+
 
 class LeadThrough:
     """Hand-guiding controller: ``tau_cmd = ctl.step(state)`` once per period.
@@ -497,6 +502,8 @@ class LeadThrough:
         if tau_measured is not None and told:
             discrepancy = tau_measured - self._sent.measured[0]
         self.observer.update(q, qd, applied, model)  # warm for guiding; the run reads itself
+        if self._enabling and elapsed < run.duration:  # a hand on the arm while it runs
+            run.interrupt(HELD_WHILE_CALIBRATING)
         run.record(elapsed, q, applied, discrepancy)
         command = run.command(elapsed, q, qd)
         if elapsed >= run.duration or run.disturbance is not None:
