@@ -359,7 +359,7 @@ class _NoCreditAtRest(lt.LeadThrough):
 
 
 def no_credit_at_rest(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
-    """:class:`_NoCreditAtRest` (README, *Friction credited to a creep*)."""
+    """:class:`_NoCreditAtRest` (docs/active_mode_log.md, *Friction credited to a creep*)."""
     return _build(robot, mode, cls=_NoCreditAtRest)
 
 

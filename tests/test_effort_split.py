@@ -7,8 +7,8 @@ import pytest
 import leadthrough as lt
 from leadthrough.experiments.guiding import Case, effort_split, figures, run_case
 
-#: Joint 1 sticks for most of this line while the hand loads it (README, *What stiction
-#: hides*): both kinds of samples occur.
+#: Joint 1 sticks for most of this line while the hand loads it (docs/guiding_results.md,
+#: *What stiction hides*): both kinds of samples occur.
 CASE = Case("dry", 1, "relaxed", "sideways")
 
 

@@ -111,7 +111,7 @@ def test_the_grown_error_covers_the_plants_level_along_the_travel_and_is_narrowe
     Farther, the 20 % is what the controller assumed before, and it does not hold: a
     ±15 % level read at one pose may be 35 % off a radian away (joint 1 of dry #1: 41 %,
     with the reading's error), which is why the friction margin is not all that stops a
-    released arm (README, *Beyond the family*).
+    released arm (docs/guiding_results.md, *Beyond the family*).
     """
     at_pose, grown = [], 0
     for trace in traces:

@@ -62,3 +62,15 @@ def test_every_benchmark_figure_names_the_script_that_draws_it():
         scripts = [path for path in (ROOT / "benchmarks").glob("*.py")
                    if f"docs/bench/{name}" in path.read_text()]  # fmt: skip
         assert scripts, f"no benchmark writes docs/bench/{name}"
+
+
+def test_every_relative_link_of_the_documents_exists():
+    """The README's and docs/*.md's links to files of the repository resolve (moved pages)."""
+    documents = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+    broken = []
+    for document in documents:
+        text = document.read_text(encoding="utf-8")
+        for target in re.findall(r"\]\(([^)\s#]+)(?:#[^)]*)?\)", text):
+            if "://" not in target and not (document.parent / target).exists():
+                broken.append(f"{document.name}: {target}")
+    assert broken == []

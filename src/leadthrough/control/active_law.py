@@ -205,8 +205,8 @@ class ActiveLaw:
 
         The friction margin is there so that a released arm stops: a friction level the
         model overstates reads, once the hand has let go, exactly as a push along the
-        motion would (README, *Where the effort goes*). An enabling device says directly
-        whether a hand is on the arm, so:
+        motion would (docs/guiding_results.md, *Where the effort goes*). An enabling
+        device says directly whether a hand is on the arm, so:
 
         - held (True): the margin is not subtracted (:attr:`margin_error` 0), and the
           virtual damping stays at its guiding value instead of rising where nothing

@@ -340,7 +340,7 @@ class MomentumObserver:
                 the model's mean at q̇ (its std, and with it the gains and
                 :attr:`error_std`, stay the model's at q̇): a caller that knows better
                 whether the joint slides passes its own (e.g. none below a rest
-                velocity: README, *Friction credited to a creep*).
+                velocity: docs/active_mode_log.md, *Friction credited to a creep*).
 
         Returns:
             The estimated external torque [Nm].

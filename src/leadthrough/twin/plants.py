@@ -101,8 +101,8 @@ _RANGE_RULES: dict[str, tuple[Callable[[float], bool], str]] = {
 
 #: A family wider than the one the defaults were developed on: friction levels 0.7–1.3 of
 #: the nominal and ±25 % along the travel (``guiding_quality.py --plants
-#: friction_scale=0.7,1.3 position_amplitude=0.25``, in ``make bench``; README, *Beyond the
-#: family*).
+#: friction_scale=0.7,1.3 position_amplitude=0.25``, in ``make bench``;
+#: docs/guiding_results.md, *Beyond the family*).
 WIDER_RANGES = PlantRanges(friction_scale=(0.7, 1.3), position_amplitude=0.25)
 
 
