@@ -65,6 +65,19 @@ def own_rest_bands(monkeypatch) -> None:
     monkeypatch.setattr(ActiveLaw, "narrow", lambda law, fused_std, own_std: None)
 
 
+def settled_after_moving_joints(monkeypatch) -> None:
+    """The NumPy law's resting reference follows a joint that moves on its own, as before.
+
+    Before, ``settled_reference`` looked at the admittance's rest only, not the joint's.
+    """
+    from leadthrough.control import active_law, admittance
+
+    def as_before(q_ref, q, moving, weight, rate, joint_moving=0.0):
+        return admittance.settled_reference(q_ref, q, moving, weight, rate)
+
+    monkeypatch.setattr(active_law, "settled_reference", as_before)
+
+
 def friction_margin_share(monkeypatch, share: float = 1.0) -> None:
     """Every active law's friction margin removes ``share`` of the level's whole error.
 

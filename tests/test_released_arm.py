@@ -25,6 +25,7 @@ from as_found import (
     friction_margin_share,
     observer_readings,
     own_rest_bands,
+    settled_after_moving_joints,
     six_hertz_calibration,
     slow_calibration_motion,
     thesis_compensation,
@@ -414,14 +415,17 @@ def test_a_joint_running_ahead_of_its_references_is_braked_not_followed(cls, run
     damping, the one thing that brakes a joint the law reads no push on, went with it.
     The feed-forward error that drives the joint here is the calibration's reading of its
     jumps (counted again for this test; see the next one) through the observer, as then,
-    and the references are not unwound, each joint's Coulomb band is its own and the
-    compensation the thesis' (as when the case was found).
+    and the references are not unwound, each joint's Coulomb band is its own, the
+    compensation the thesis' and the resting reference drawn after a joint that moves (as
+    when the case was found; today's reference stays, which also stops it).
     """
     monkeypatch.setattr(calibration, "_JUMPING", np.inf)
     _calibration_of_the_time(monkeypatch)
     observer_readings(monkeypatch)
     own_rest_bands(monkeypatch)
     thesis_compensation(monkeypatch)
+    if runs:  # the resting reference of the time, which followed a joint that runs
+        settled_after_moving_joints(monkeypatch)
 
     def factory(robot, mode):
         parameters = lt.LeadThroughParameters(unwind_time=None)

@@ -37,8 +37,9 @@ the joints read together weigh (``LeadThroughParameters.torque_ripple``), then t
 tracking at 4 Hz over 15 mrad, a loop that decays with two periods of delay, and a joint run
 off its motion keeping none of its friction (``CalibrationParameters.bandwidth``,
 ``CalibrationRun.runaway``), then the calibration's gravity error taken as a relative error
-of G as far as a drive gain explains it (``calibration.gravity_share``). A faster step must
-reproduce them.
+of G as far as a drive gain explains it (``calibration.gravity_share``), then a resting
+reference drawn only to a joint that rests itself (``admittance.settled_reference``). A
+faster step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

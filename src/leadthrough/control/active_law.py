@@ -416,7 +416,7 @@ class ActiveLaw:
         pushed = signed_push_weight(push, self.uncertainty, p.assist_knee)
         self.signed_weight = self.signed_weight + self._push_average * (pushed - self.signed_weight)
         q_ref = settled_reference(references.q_ref, q, moving, self.damping_weight,
-                                  self._settle_rate)  # fmt: skip
+                                  self._settle_rate, motion_sign(qd, p.rest_velocity))  # fmt: skip
         references = AdmittanceState(q_ref, references.qd_ref)
         rest = self._admittance_scalars[_REST_DAMPING]  # 0 while the device is held
         damping = virtual_damping(inertia, p.damping_time, rest, self.damping_weight)

@@ -247,7 +247,12 @@ def unwound(qd_ref: FloatArray, qd: FloatArray, rate: float) -> FloatArray:
 
 
 def settled_reference(
-    q_ref: FloatArray, q: FloatArray, moving: FloatArray, weight: FloatArray, rate: float
+    q_ref: FloatArray,
+    q: FloatArray,
+    moving: FloatArray,
+    weight: FloatArray,
+    rate: float,
+    joint_moving: FloatArray | float = 0.0,
 ) -> FloatArray:
     """Position reference of the joints that rest with no push, drawn to where they are [rad].
 
@@ -255,12 +260,16 @@ def settled_reference(
     A joint that friction stopped short of its reference (the operator let go, or stopped
     pushing) would stay loaded by that spring against stiction: under the dither it
     creeps, and it jumps when the stiction gives. Where nobody starts or sustains a motion
-    (``weight`` → 0) and the admittance has come to rest (``moving``, the
-    :func:`motion_sign` of the reference velocity, → 0), the reference follows the joint,
-    ``q_ref += rate (1 − |s|) (1 − w) (q − q_ref)``: the spring keeps what an operator put
-    in, and what holds the joint where it stopped against a slow creep, not the push that
-    was left when the motion ended. No threshold: the large errors of a lost tracking are
-    re-anchored at once instead.
+    (``weight`` → 0), the admittance has come to rest (``moving``, the
+    :func:`motion_sign` of the reference velocity, → 0) and so has the joint
+    (``joint_moving``, the same sign of its own velocity, → 0), the reference follows the
+    joint, ``q_ref += rate (1 − |s|) (1 − |s_q|) (1 − w) (q − q_ref)``: the spring keeps
+    what an operator put in, and what holds the joint where it stopped against a slow
+    creep, not the push that was left when the motion ended. A joint that moves on its
+    own while nothing drives it (a gravity error its friction cannot hold) is not
+    followed: a reference drawn after it would turn a steady error into a steady drift,
+    where the spring, left to build, holds it. No threshold: the large errors of a lost
+    tracking are re-anchored at once instead.
 
     Args:
         q_ref: Position reference [rad].
@@ -268,8 +277,10 @@ def settled_reference(
         moving: :func:`motion_sign` of the reference velocity [–].
         weight: :func:`damping_weight` of every joint [–].
         rate: Share of the error removed per period, ``dt / (settle_time + dt)`` [–].
+        joint_moving: :func:`motion_sign` of the joint's own velocity [–].
     """
-    return q_ref + rate * ((1.0 - np.abs(moving)) * (1.0 - weight)) * (q - q_ref)
+    resting = (1.0 - np.abs(moving)) * (1.0 - np.abs(joint_moving))
+    return q_ref + rate * (resting * (1.0 - weight)) * (q - q_ref)
 
 
 def virtual_damping(

@@ -220,8 +220,11 @@ def admittance_law(q, qd, drive, constraint, mass, residuals, uncertainty, joint
             z2 = z * z
             pushed = sign * (z2 / (1.0 + z2))
         signed_weight[i] = signed_weight[i] + average * (pushed - signed_weight[i])
-        # the admittance at rest and no push: the reference follows the joint (settled_reference)
-        q_ref[i] += settle * ((1.0 - abs(moving)) * (1.0 - damping_weight[i])) * (q[i] - q_ref[i])
+        # the admittance and the joint at rest, no push: the reference follows the joint
+        # (settled_reference)
+        own = w / math.sqrt(w * w + rest_velocity * rest_velocity)
+        resting = (1.0 - abs(moving)) * (1.0 - abs(own))
+        q_ref[i] += settle * (resting * (1.0 - damping_weight[i])) * (q[i] - q_ref[i])
     for i in range(n):
         total = 0.0
         for j in range(n):

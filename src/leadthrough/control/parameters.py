@@ -83,11 +83,12 @@ class LeadThroughParameters:
             damping, so the arm stops instead of coasting on its virtual inertia. Shorter
             than a release's stop, longer than a stiff hand's oscillation (0.2 s at 5 Hz),
             whose alternating sign must not modulate the damping.
-        settle_time: Time over which the position reference of a joint whose admittance
-            rests with no push is drawn to where the joint is [s]
+        settle_time: Time over which the position reference of a resting joint whose
+            admittance rests with no push is drawn to where the joint is [s]
             (:func:`~leadthrough.control.admittance.settled_reference`): the tracking
             spring lets go of the push left when the motion ended, and holds the joint
-            where it stopped against a slower creep.
+            where it stopped against a slower creep (a joint that moves on its own is not
+            followed).
         unwind_time: Time constant with which the velocity reference of a joint that lags
             behind it (stiction holds the joint, a contact, an end-stop) relaxes towards
             the joint's velocity [s] (:func:`~leadthrough.control.admittance.unwound`):
