@@ -224,10 +224,10 @@ def test_on_a_calibrated_arm_following_the_push_shakes_less_than_the_thesis_law(
     """What the default gains: lugre #3's relaxed sideways line, calibrated.
 
     With the thesis' law the tool shakes 1.34× as much as in passive mode, following the
-    push 0.96× (one of 742 of the README's 2013 paired calibrated cases that shake less by
-    more than 0.05; 151 shake more). With the calibration reading the observer and its
-    gravity error kept constant, as when it was measured (read from the momentum balance,
-    both laws shake about as passive mode).
+    push 0.96× (one of 742 of the 2013 paired calibrated cases of docs/guiding_results.md
+    that shake less by more than 0.05; 151 shake more). With the calibration reading the
+    observer and its gravity error kept constant, as when it was measured (read from the
+    momentum balance, both laws shake about as passive mode).
     """
     observer_readings(monkeypatch)
     constant_gravity_bias(monkeypatch)

@@ -55,8 +55,11 @@ def test_rewrite_and_stale_on_a_small_readme(tmp_path):
 
 
 def test_every_benchmark_figure_names_the_script_that_draws_it():
-    """A docs/bench PNG the README shows exists, and its script writes it by default."""
+    """A docs/bench PNG the README or a docs page shows exists, and its script writes it."""
     shown = set(re.findall(r"docs/bench/([\w.-]+\.png)", README))
+    for page in (ROOT / "docs").glob("*.md"):
+        shown |= set(re.findall(r"\]\(bench/([\w.-]+\.png)\)", page.read_text(encoding="utf-8")))
+    assert shown  # the pages show some (an empty set would check nothing)
     for name in shown:
         assert (ROOT / "docs/bench" / name).stat().st_size > 10_000
         scripts = [path for path in (ROOT / "benchmarks").glob("*.py")

@@ -110,7 +110,7 @@ class ActiveLaw:
     #: Share of the level's error the friction margin removes (:attr:`margin_error`): all
     #: of it. The weight's scale is soft (a residual of its size passes 0.8 of itself), so
     #: no share may be left to it: with ¾, just beyond the plant family, released arms ran
-    #: on (README). Experiments set less on a subclass.
+    #: on (docs/guiding_results.md, *Beyond the family*). Experiments set less on a subclass.
     margin_share = 1.0
     #: Relieve the friction margin where the reading along the motion exceeds it
     #: (:func:`~leadthrough.control.admittance.relieved_margin`): lighter on the plant
