@@ -4,7 +4,7 @@ import dataclasses
 
 import numpy as np
 
-from leadthrough.control import calibration
+from leadthrough.control import active_law, admittance, calibration
 from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.calibration import CalibrationParameters, CalibrationRun
 from leadthrough.control.dither import DitherParameters
@@ -70,7 +70,6 @@ def settled_after_moving_joints(monkeypatch) -> None:
 
     Before, ``settled_reference`` looked at the admittance's rest only, not the joint's.
     """
-    from leadthrough.control import active_law, admittance
 
     def as_before(q_ref, q, moving, weight, rate, joint_moving=0.0):
         return admittance.settled_reference(q_ref, q, moving, weight, rate)
