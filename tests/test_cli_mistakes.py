@@ -209,6 +209,36 @@ def test_the_reported_mistakes_are_one_line(workdir, argv):
     assert_one_line_error(*run(argv, workdir)[::2])
 
 
+@pytest.mark.parametrize(
+    ("option", "flag"),
+    [(["--joints", "1"], "--joints"), (["--save-log", "saved.csv"], "--save-log"),
+     (["--seed", "3"], "--seed"), (["--random-friction"], "--random-friction")],
+    ids=lambda value: value if isinstance(value, str) else " ".join(value),
+)  # fmt: skip
+def test_twin_options_on_a_real_arms_runs_are_refused(workdir, option, flag):
+    """The twin-only options of identify with a real arm's runs: one line naming the option.
+
+    They were ignored silently: ``--joints 4`` fitted every joint, ``--save-log`` wrote nothing.
+    """
+    status, _, err = run(["identify", "--log", "taught.mcap", *option], workdir)
+    assert_one_line_error(status, err)
+    assert f"{flag}: applies to the twin" in err
+    assert not (workdir / "saved.csv").exists()
+
+
+def test_a_folder_that_cannot_be_written_is_one_line(workdir):
+    """An OSError while writing (a folder the system refuses) is one line naming the path."""
+
+    def refused(*args, **kwargs):
+        raise FileNotFoundError(2, "No such file or directory", "/proc/nope")
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(sys.modules["leadthrough.cli.main"], "_info", refused)
+        status, _, err = run(["info"], workdir)
+    assert_one_line_error(status, err)
+    assert "No such file or directory: /proc/nope" in err
+
+
 def test_an_existing_recording_needs_force(workdir):
     """`teach --out` naming a recording refuses without --force, names --force; with it, runs."""
     status, _, err = run(["teach", "--out", "taught.mcap"], workdir)

@@ -163,3 +163,16 @@ def test_unreadable_log_file(tmp_path):
     garbled.write_text("run,t,q1\n0,0.0\n")
     with pytest.raises(LogFileError, match=r"garbled\.csv"):
         load_logs(garbled)
+    other = tmp_path / "other.csv"  # a CSV of another layout: its columns named, not NumPy's
+    other.write_text("time,x,y\n0.0,1.0,2.0\n")
+    with pytest.raises(LogFileError, match=r"other\.csv: .*time,x,y.*not the excitation log"):
+        load_logs(other)
+
+
+def test_a_bad_log_is_named_by_its_file(yumi):
+    """A log read from a file is named by it in the errors, not by its place in the list."""
+    n, t = yumi.n_joints, np.arange(12) * 0.004
+    short = lt.JointLog(t, np.zeros((12, n)), np.zeros((12, n)), np.zeros((12, n)),
+                        source="runs/short.csv")  # fmt: skip
+    with pytest.raises(IdentificationError, match=r"runs/short\.csv: too short \(12 samples"):
+        identify_friction([short], lt.Dynamics(yumi))

@@ -148,3 +148,15 @@ def test_real_ur10e_beats_the_nominal_urdf_on_held_out_runs(nominal):
             before = rms(prediction_error(log, nominal))
             assert np.sqrt(np.mean(ours**2)) < 0.8 * np.sqrt(np.mean(before**2)), name
             assert ours[1] < 0.7 * before[1], name  # joint 2, the worst of the URDF
+
+
+def test_a_joint_without_rows_is_reported_as_nominal():
+    """A joint that never moved fast enough shows dashes, not a fit of 1.000 on 0 rows."""
+    from leadthrough.identification.dynamics import DynamicsReport
+
+    ones, n = np.ones(2), 2
+    report = DynamicsReport(ones * 0.1, ones * 0.2, np.array([500.0, 0.0]), ones, ones * 0.01,
+                            np.zeros(n), {}, np.zeros(20))  # fmt: skip
+    first, second = str(report).splitlines()[1:]
+    assert "0.100" in first
+    assert "1.000" not in second and "–" in second and "nominal" in second

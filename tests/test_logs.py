@@ -82,6 +82,14 @@ def test_unknown_and_missing_files_fail_in_one_line(tmp_path):
         lt.read_log(tmp_path / "notes.txt")
 
 
+def test_a_folder_of_csv_logs_is_told_to_name_one(tmp_path):
+    """A folder is read as a Panda text log; one holding UR CSVs says to give one file."""
+    for name in ("link4.csv", "ur-static.csv"):
+        (tmp_path / name).write_text("0," * 18 + "0\n")
+    with pytest.raises(LogError, match=r"Panda text log.*2 other logs, e\.g\. link4\.csv: give"):
+        lt.read_log(tmp_path)
+
+
 def test_panda_text_log_reads_samples_on_consecutive_lines(tmp_path):
     """Each sample on n consecutive lines; irregular time stamps kept as logged."""
     t = np.array([0.0, 1.0, 2.0, 4.5, 5.5, 6.5, 7.5, 9.0, 10.0, 11.0]) * 1e-3

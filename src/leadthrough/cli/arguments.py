@@ -136,6 +136,16 @@ def existing_file(text: str) -> Path:
     return path
 
 
+def existing_log(text: str) -> Path:
+    """An argument type: a log file, or a folder for logs kept as several files (a Panda's)."""
+    path = Path(text)
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a log file, got an empty name")
+    if not path.exists():
+        raise argparse.ArgumentTypeError(f"{text}: no such file or folder")
+    return path
+
+
 def add_robot_arguments(parser: argparse.ArgumentParser, default: str = "yumi") -> None:
     """``--robot``, ``--tip`` and ``--drive-data``: the arm a command works on."""
     from leadthrough.model import robots

@@ -60,7 +60,7 @@ def identify(
         save_logs(study.logs, save_log)
     study.model.save(out / "friction.toml")
     summary = summarise(study, out)
-    missing = _not_identified(study)
+    missing = study.report.not_identified_note()
     if missing:
         warnings.warn(missing, stacklevel=2)
     (out / "identification.txt").write_text(summary + "\n", encoding="utf-8")
@@ -115,7 +115,7 @@ def summarise(study: FrictionStudy, out: Path) -> str:
             f"{model.position_linear[j]:>8.3f}{model.position_quadratic[j]:>8.3f}"
         )
     lines += ["", str(study.report)]
-    missing = _not_identified(study)
+    missing = study.report.not_identified_note()
     if missing:
         lines += ["", missing]
     errors = study.errors()
@@ -136,19 +136,6 @@ def summarise(study: FrictionStudy, out: Path) -> str:
 def _percent(error: float) -> str:
     """A relative error in %, signed; "–" when it has none (the true value is 0)."""
     return f"{100 * error:+.2f}" if np.isfinite(error) else "–"
-
-
-def _not_identified(study: FrictionStudy) -> str:
-    """One line naming the joints not identified (1-based), or "" when every one was."""
-    joints = study.report.not_identified()
-    if not joints:
-        return ""
-    names = ", ".join(str(j + 1) for j in joints)
-    return (
-        f"joint{'s' if len(joints) > 1 else ''} {names} not identified (not asked for, or "
-        f"never moved in the logs): friction.toml keeps the robot file's nominal friction "
-        f"for {'them' if len(joints) > 1 else 'it'}"
-    )
 
 
 def _figures(study: FrictionStudy, out: Path) -> None:

@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import argparse
 import warnings
-from pathlib import Path
 
-from leadthrough.cli.arguments import add_robot_arguments, existing_file, robot_from
+from leadthrough.cli.arguments import add_robot_arguments, existing_file, existing_log, robot_from
 from leadthrough.estimation.log_observer import measured_torque
 from leadthrough.experiments import real_logs
 from leadthrough.friction.model import FrictionModel
@@ -17,16 +16,6 @@ EPILOG = """examples:
   leadthrough inspect run.csv --robot my_ur10e.urdf --friction friction.toml --out out/run
   leadthrough inspect panda_gaz2019/ --robot panda          # the Panda's text files (a folder)
 """
-
-
-def existing_log(text: str) -> Path:
-    """An argument type: a log file, or a folder for logs kept as several files."""
-    path = Path(text)
-    if not text.strip():
-        raise argparse.ArgumentTypeError("expected a log file, got an empty name")
-    if not path.exists():
-        raise argparse.ArgumentTypeError(f"{text}: no such file or folder")
-    return path
 
 
 def add_arguments(parser: argparse.ArgumentParser, out_directory) -> None:

@@ -60,6 +60,7 @@ def _identify(args: argparse.Namespace) -> int:
     if args.realdata is not None and args.log:
         raise ParameterError("--realdata", "give either --realdata or --log, not both")
     if args.realdata is not None or real_logs(args.log, args.held_out):
+        _refuse_twin_options(args)
         print(identify_real(args))
         return 0
     robot = arg.robot_from(args)
@@ -69,11 +70,26 @@ def _identify(args: argparse.Namespace) -> int:
         log=args.log[0] if args.log else None,
         save_log=args.save_log,
         joints=parse_joints(args.joints, robot.n_joints),
-        seed=args.seed,
+        seed=0 if args.seed is None else args.seed,
         random_friction=args.random_friction,
     )
     print(summary)
     return 0
+
+
+#: ``identify`` options of the twin's experiment and the project's excitation logs only.
+_TWIN_OPTIONS = {"joints": "--joints", "save_log": "--save-log", "seed": "--seed",
+                 "random_friction": "--random-friction"}  # fmt: skip
+
+
+def _refuse_twin_options(args: argparse.Namespace) -> None:
+    """A real arm's runs identify every joint that moved: twin-only options are mistakes."""
+    given = [flag for name, flag in _TWIN_OPTIONS.items()
+             if getattr(args, name) not in (None, False)]  # fmt: skip
+    if given:
+        raise ParameterError(given[0], "applies to the twin's experiment and the project's "
+                             "excitation logs only; a real arm's runs (--log, --realdata) "
+                             "identify every joint that moved in them")  # fmt: skip
 
 
 _EPILOG_DEMO = """examples:
@@ -194,12 +210,13 @@ def build_parser() -> argparse.ArgumentParser:
     arg.add_robot_arguments(identify)
     identify.add_argument(
         "--log",
-        type=arg.existing_file,
+        type=arg.existing_log,
         nargs="+",
         help="read logs instead of the twin: the project's excitation logs (.csv or .npz), or"
-        " a real arm's runs (UR CSV, Panda text, .mcap) to identify friction and dynamics",
+        " a real arm's runs (UR CSV, a Panda text folder, .mcap) to identify friction and"
+        " dynamics",
     )
-    identify.add_argument("--held-out", type=arg.existing_file, nargs="+", default=[],
+    identify.add_argument("--held-out", type=arg.existing_log, nargs="+", default=[],
                           help="runs not fitted, to judge the identified dynamics on")  # fmt: skip
     identify.add_argument("--realdata", type=arg.realdata_directory,
                           help="folder of the public UR10e and Panda logs (../shared/realdata):"
@@ -208,7 +225,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--save-log", type=arg.log_file, help="also write the logs (.csv or .npz)"
     )
     identify.add_argument("--joints", help="joints to identify, 1-based, e.g. 1,4 (default all)")
-    identify.add_argument("--seed", type=arg.seed, default=0, help="seed of the twin")
+    identify.add_argument("--seed", type=arg.seed, help="seed of the twin (default 0)")
     identify.add_argument("--random-friction", action="store_true",
                           help="give the twin randomly drawn friction (seeded)")  # fmt: skip
     identify.add_argument(
@@ -317,6 +334,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     except BrokenPipeError:
         return arg.quiet_broken_pipe()
+    except OSError as error:  # a folder that cannot be created, a full disk, a lost mount
+        place = f": {error.filename}" if error.filename else ""
+        print(f"leadthrough: error: {error.strerror or error}{place}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

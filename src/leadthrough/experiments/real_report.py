@@ -10,6 +10,7 @@ Two entry points, both behind ``leadthrough identify``:
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -23,7 +24,12 @@ from leadthrough.experiments.real_friction import (
     quietly,
     ur10e_friction,
 )
-from leadthrough.friction.identification import fit_friction, friction_samples
+from leadthrough.friction.identification import (
+    IdentificationError,
+    fit_friction,
+    friction_samples,
+)
+from leadthrough.friction.model import FrictionModel
 from leadthrough.identification.dynamics import identify_dynamics
 from leadthrough.identification.prediction import prediction_error, rms
 from leadthrough.model.description import RobotDescription
@@ -75,8 +81,14 @@ def write_logs_report(
     fitted = [quietly(read_log, path, robot) for path in logs]
     dynamics = Dynamics(robot)
     samples = friction_samples(fitted, dynamics)
-    friction, friction_report = fit_friction(samples, dynamics)
+    try:
+        friction, friction_report = fit_friction(samples, dynamics)
+    except IdentificationError as error:  # about every run together: name them
+        raise IdentificationError(f"{', '.join(map(str, logs))}: {error}") from None
     identified, report = identify_dynamics(fitted, robot, friction)
+    missing = friction_report.not_identified_note()
+    if missing:
+        warnings.warn(missing, stacklevel=2)
     panels = []
     for j in friction_report.joints:
         mine = samples.moved[:, j]
@@ -87,7 +99,9 @@ def write_logs_report(
                        {"ours": (grid, friction.mean(velocity)[:, j])}))  # fmt: skip
     _save_friction_figure(panels, f"{robot.name}: friction", out / "friction.png", raw=True)
     lines = [f"# Identification of {robot.name}", "", f"Fitted on: {', '.join(map(str, logs))}.",
-             "", "Friction:", "", "```", str(friction_report), "```", "", "Dynamics fit:", "",
+             "", "Friction:", "", "```", str(friction_report), "```", "",
+             *friction_values(friction, friction_report.joints), "",
+             *([missing, ""] if missing else []), "Dynamics fit:", "",
              "```", str(report), "```", "", "![friction](friction.png)", ""]  # fmt: skip
     for index, path in enumerate(held_out):
         log = quietly(read_log, path, robot)
@@ -104,6 +118,18 @@ def write_logs_report(
     text = "\n".join(lines)
     (out / "report.md").write_text(text + "\n", encoding="utf-8")
     return text
+
+
+def friction_values(friction: FrictionModel, joints: Sequence[int]) -> list[str]:
+    """A Markdown table of the identified joints' friction parameters (SPEC §4 names)."""
+    rows = ["| joint | τ_C [Nm] | c [Nm s/rad] | A [s/rad] | B [rad/s] | σ [Nm] | k₁ | k₂ |",
+            "|---:|---:|---:|---:|---:|---:|---:|---:|"]  # fmt: skip
+    for j in joints:
+        rows.append(f"| {j + 1} | {friction.coulomb[j]:.4f} | {friction.viscous[j]:.4f} | "
+                    f"{friction.slope[j]:.0f} | {friction.half_width[j]:.2e} | "
+                    f"{friction.noise_std[j]:.4f} | {friction.position_linear[j]:.3f} | "
+                    f"{friction.position_quadratic[j]:.3f} |")  # fmt: skip
+    return rows
 
 
 def _rms_rows(errors: dict) -> list[str]:

@@ -101,6 +101,20 @@ class FitReport:
         """Joints (0-based) not identified: their model values are the prior's."""
         return tuple(j for j in range(len(self.samples)) if j not in self.joints)
 
+    def not_identified_note(self, where: str = "friction.toml") -> str:
+        """One line naming the joints not identified (1-based), or "" when every one was.
+
+        ``where``: what keeps their prior values, as the user knows it.
+        """
+        joints = self.not_identified()
+        if not joints:
+            return ""
+        names = ", ".join(str(j + 1) for j in joints)
+        several = len(joints) > 1
+        return (f"joint{'s' if several else ''} {names} not identified (not asked for, or "
+                f"never slid long enough in the logs): {where} keeps the robot file's nominal "
+                f"friction for {'them' if several else 'it'}")  # fmt: skip
+
     def __str__(self) -> str:
         lines = [f"{'joint':>5}{'samples':>9}{'RMS [Nm]':>10}{'±τ_C':>9}{'±c':>9}{'position':>10}"
                  f"{'level off along travel':>24}"]  # fmt: skip
@@ -227,12 +241,18 @@ def _is_log(value: Any) -> bool:
     return isinstance(value, Mapping) or hasattr(value, "tau")
 
 
+def log_name(log: Any, index: int) -> str:
+    """How an error names a log: its file (``JointLog.source``), else "log <index>" (0-based)."""
+    source = None if isinstance(log, Mapping) else getattr(log, "source", None)
+    return str(source) if source else f"log {index}"
+
+
 def log_field(log: Any, name: str, index: int = 0) -> FloatArray:
     """Array ``name`` of a log given as a mapping or an object."""
     try:
         value = log[name] if isinstance(log, Mapping) else getattr(log, name)
     except (KeyError, AttributeError):
-        raise IdentificationError(f"log {index}: missing '{name}'") from None
+        raise IdentificationError(f"{log_name(log, index)}: missing '{name}'") from None
     return np.asarray(value, dtype=float)
 
 
@@ -241,20 +261,20 @@ def _log_samples(
 ) -> tuple[FloatArray, ...]:
     """(q, q̇, τ_f, moved) of one validated log."""
     t, q, qd, tau = (log_field(log, name, index) for name in ("t", "q", "qd", "tau"))
-    n = dynamics.n
+    n, label = dynamics.n, log_name(log, index)
     if t.ndim != 1 or len(t) < 50:
-        raise IdentificationError(f"log {index}: too short ({len(t)} samples, need ≥ 50)")
+        raise IdentificationError(f"{label}: too short ({len(t)} samples, need ≥ 50)")
     for name, array in (("q", q), ("qd", qd), ("tau", tau)):
         if array.shape != (len(t), n):
-            raise IdentificationError(f"log {index}: '{name}' has shape {array.shape}, "
+            raise IdentificationError(f"{label}: '{name}' has shape {array.shape}, "
                                       f"expected ({len(t)}, {n}) like 't'")  # fmt: skip
     for name, array in (("t", t), ("q", q), ("qd", qd), ("tau", tau)):
         bad = np.argwhere(~np.isfinite(array))
         if bad.size:
             where = f"sample {bad[0][0]}" + (f", joint {bad[0][1] + 1}" if array.ndim > 1 else "")
-            raise IdentificationError(f"log {index}: '{name}' is not finite at {where}")
+            raise IdentificationError(f"{label}: '{name}' is not finite at {where}")
     if np.any(np.diff(t) <= 0):
-        raise IdentificationError(f"log {index}: 't' must increase strictly")
+        raise IdentificationError(f"{label}: 't' must increase strictly")
     smoothing = pole(float(np.median(np.diff(t))))  # the thesis' 7.8 ms at the log's rate
     q_f, qd_f, tau_f = (low_pass_signal(x, smoothing) for x in (q, qd, tau))
     qdd = np.gradient(qd_f, t, axis=0)

@@ -74,6 +74,9 @@ def _read_npz(path: Path) -> dict[str, np.ndarray]:
 def _read_csv(path: Path) -> dict[str, np.ndarray]:
     with path.open(encoding="utf-8") as file:
         header = file.readline().strip().split(",")
+    if "t" not in header or "tau1" not in header:
+        raise ValueError(f"its first line names {','.join(header[:4])}…, not the excitation "
+                         "log's columns run,t,q1..,qd1..,tau1..")  # fmt: skip
     with warnings.catch_warnings():  # an empty table is the error below, not a warning
         warnings.simplefilter("ignore", UserWarning)
         table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)

@@ -102,6 +102,10 @@ class DynamicsReport:
         lines = [f"{'joint':>5}{'rows':>7}{'RMS nominal':>13}{'RMS ours':>10}{'g':>8}{'±g':>7}"
                  f"{'offset':>8}"]  # fmt: skip
         for j in range(len(self.residual_rms)):
+            if self.samples[j] == 0:  # no row of this joint: its values are the prior's
+                lines.append(f"{j + 1:>5}{0:>7}{'–':>13}{'–':>10}{'–':>8}{'–':>7}{'–':>8}"
+                             "   (never moved fast enough: nominal)")  # fmt: skip
+                continue
             lines.append(f"{j + 1:>5}{self.samples[j]:>7.0f}{self.nominal_rms[j]:>13.3f}"
                          f"{self.residual_rms[j]:>10.3f}{self.gain_scale[j]:>8.3f}"
                          f"{self.gain_std[j]:>7.3f}{self.offset[j]:>8.3f}")  # fmt: skip

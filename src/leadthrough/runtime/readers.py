@@ -100,8 +100,10 @@ def detect_format(path: Path) -> Format:
         return "excitation"
     if first.count(",") + 1 in _UR_WIDTHS:
         return "ur_csv"
-    raise LogError(f"{path}: unknown log format (not a UR CSV, Panda text, .mcap or excitation "
-                   "log); name it with format=")  # fmt: skip
+    widths = ", ".join(str(w) for w in sorted(_UR_WIDTHS))
+    raise LogError(f"{path}: unknown log format: its first line is neither a UR CSV row "
+                   f"({widths} columns) nor an excitation log's header (run,t,… or t,…), and "
+                   "it is no Panda text log, .mcap recording or .npz")  # fmt: skip
 
 
 def _with_robot(log: JointLog, robot: RobotDescription) -> JointLog:
@@ -216,7 +218,11 @@ def _read_panda_txt(path: Path) -> JointLog:
              ("time", "positions", "velocity", "torques")}  # fmt: skip
     missing = [kind for kind, found in files.items() if len(found) != 1]
     if missing:
-        raise LogError(f"{folder}: a Panda text log needs one *_{missing[0]}.txt file")
+        others = sorted(p.name for p in folder.iterdir() if p.suffix in (".csv", ".mcap"))
+        hint = (f" (it holds {len(others)} other logs, e.g. {others[0]}: give one file)"
+                if others else "")  # fmt: skip
+        raise LogError(f"{folder}: a folder is read as a Panda text log, which needs one "
+                       f"*_{missing[0]}.txt file{hint}")  # fmt: skip
     columns = {kind: _one_per_line(found[0]) for kind, found in files.items()}
     t = columns["time"]
     n = columns["positions"].size // max(t.size, 1)
