@@ -215,6 +215,13 @@ def main(argv: list[str] | None = None) -> None:
         "about 10 s per plant) and build both modes with it instead of the nominal friction",
     )
     args = parser.parse_args(argv)
+    old = None
+    if args.compare:  # read before the run: a wrong file must not cost the run's results
+        try:
+            with open(args.compare) as handle:
+                old = json.load(handle)["summary"]
+        except (OSError, ValueError, KeyError, TypeError) as error:
+            parser.error(f"--compare {args.compare}: not a saved run ({error})")
     built = uncalibrated_factory if args.uncalibrated else default_factory
     factory = passive_factory = functools.partial(built, dt=args.dt)
     if args.identified:
@@ -253,10 +260,6 @@ def main(argv: list[str] | None = None) -> None:
     print(HEADER)
     results, stats = evaluate(args.cases, factory, robot, report, seeds,
                               passive_factory, hands, ranges)  # fmt: skip
-    old = None
-    if args.compare:
-        with open(args.compare) as handle:
-            old = json.load(handle)["summary"]
     print_summary(stats, old)
     print(uncalibrated_line(results))
     saturated = saturated_line(results)

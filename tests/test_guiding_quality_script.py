@@ -95,6 +95,21 @@ def test_a_control_period_the_twin_cannot_run_is_a_one_line_error(capsys):
         assert capsys.readouterr().err.strip().splitlines()[-1].endswith(says)
 
 
+def test_a_compare_file_that_is_no_saved_run_is_refused_before_the_run(tmp_path, capsys):
+    """``--compare`` is read first: a missing or foreign file costs no run's results.
+
+    It was read after the run, before ``--save`` wrote anything: a typo lost both.
+    """
+    foreign = tmp_path / "other.json"
+    foreign.write_text('{"cases": {}}')
+    for path in (tmp_path / "missing.json", foreign):
+        with pytest.raises(SystemExit):
+            guiding_quality.main(["--cases", "quick", "--compare", str(path),
+                                  "--save", str(tmp_path / "run.json")])  # fmt: skip
+        assert f"--compare {path}: not a saved run" in capsys.readouterr().err
+    assert not (tmp_path / "run.json").exists()
+
+
 def test_identified_first_builds_the_default_controllers_only(capsys):
     """``--identified`` with a custom ``--factory`` is a one-line error.
 
