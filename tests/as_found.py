@@ -4,10 +4,11 @@ import dataclasses
 
 import numpy as np
 
-from leadthrough.control import active_law, admittance, calibration
+from leadthrough.control import active_law, admittance, calibration, feedforward
 from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.calibration import CalibrationParameters, CalibrationRun
 from leadthrough.control.dither import DitherParameters
+from leadthrough.control.feedforward import PassiveFeedForward
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.friction.compensation import CoulombCompensationParameters
 
@@ -92,6 +93,16 @@ def two_second_park(monkeypatch) -> None:
     cases showed.
     """
     built_as(monkeypatch, DitherParameters(park_time=2.0, creep=None))
+
+
+def uncapped_dither(monkeypatch) -> None:
+    """The dither not kept under the compensation's ceiling, as before (the NumPy step).
+
+    Uncalibrated, where the ceiling is below 0.3 τ_C, the ceiling ends creeps the dither
+    drove.
+    """
+    monkeypatch.setattr(PassiveFeedForward, "compiled", False)
+    monkeypatch.setattr(feedforward, "dither_within", lambda dither, ceiling: dither)
 
 
 def unread_torque_offset(monkeypatch) -> None:

@@ -345,3 +345,25 @@ def test_a_delay_is_a_whole_number_of_periods_from_one(dynamics, friction, delay
     """Delay 0 (a command measured before it is computed) and non-integers are refused."""
     with pytest.raises(ParameterError, match="measurement_delay"):
         PassiveFeedForward(dynamics, friction, dt=DT, measurement_delay=delay)
+
+
+def test_the_dither_stays_under_the_compensations_ceiling(dynamics, friction):
+    """Alone the dither moves no joint: within ± (1 − e) τ_C − gravity error, in both paths.
+
+    A joint whose level the model may overstate by 60 % keeps 0.4 τ_C of a 0.6 τ_C dither;
+    one where the gravity error may eat the whole level gets none; the others their whole
+    amplitude. The NumPy step and the compiled one agree.
+    """
+    q = dynamics.robot.home()
+    error = np.full(N, 0.2)
+    error[1], error[3] = 0.6, 1.0  # joint 2 known to ±60 %, joint 4 not at all
+    settings = DitherParameters(amplitude=0.6)
+    level = friction.coulomb_level(q)
+    for compiled in (True, False):
+        feedforward = PassiveFeedForward(dynamics, friction, DT, dither=settings,
+                                         friction_error=error, gravity_uncertainty=0.1)  # fmt: skip
+        feedforward.compiled = compiled
+        dither = feedforward.step(q, np.zeros(N), t=0.0, gravity_reference=dynamics.gravity(q))
+        expected = 0.6 * level
+        expected[1], expected[3] = 0.4 * level[1], 0.0
+        np.testing.assert_allclose(np.abs(dither.dither), expected, rtol=1e-12, atol=1e-15)

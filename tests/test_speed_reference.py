@@ -38,8 +38,9 @@ tracking at 4 Hz over 15 mrad, a loop that decays with two periods of delay, and
 off its motion keeping none of its friction (``CalibrationParameters.bandwidth``,
 ``CalibrationRun.runaway``), then the calibration's gravity error taken as a relative error
 of G as far as a drive gain explains it (``calibration.gravity_share``), then a resting
-reference drawn only to a joint that rests itself (``admittance.settled_reference``). A
-faster step must reproduce them.
+reference drawn only to a joint that rests itself (``admittance.settled_reference``), then
+the dither kept under the compensation's ceiling (``feedforward.dither_within``). A faster
+step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

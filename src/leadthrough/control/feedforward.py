@@ -265,6 +265,8 @@ class PassiveFeedForward:
             dither, dead_band = np.zeros(self.dynamics.n), None
         else:
             dither = self.dither.decide(qd, q, now, wave)
+            if ceiling is not None:
+                dither = dither_within(dither, ceiling)
             base = self.compensation.parameters.dead_band
             dead_band = np.where(self.dither.active, self.dither.parameters.moving_velocity, base)
         # (gravity, friction, dither, dither_in_measurement), positional: the cheaper call
@@ -278,6 +280,16 @@ class PassiveFeedForward:
         in_measurement = self._sent.measured
         self._sent.push(dither)
         return in_measurement
+
+
+def dither_within(dither: FloatArray, ceiling: FloatArray) -> FloatArray:
+    """The dither [Nm] within ± the compensation's ceiling [Nm]: alone it moves no joint.
+
+    The ceiling is the friction surely there less the gravity error that may remain
+    (:func:`~leadthrough.friction.compensation.compensation_ceiling`): a released joint
+    stops under a compensation below it, and a resting one stays under a dither below it.
+    """
+    return np.clip(dither, -ceiling, ceiling)
 
 
 #: Scalars of :func:`_feed_forward_step`, in order (``park_time`` inf: never parks).
@@ -303,7 +315,7 @@ def _feed_forward_step(q, qd, level, gravity, friction_error, reference, push, r
     (``anchor`` each rested joint's position while every joint rests, NaN otherwise; an
     anchored joint farther than ``creep`` from it sets ``quiet_since`` to −inf: parked;
     ``creep`` inf: never), the rested joints and their dither ``amplitude · τ_C(q)`` [Nm]
-    (``amplitude`` signed by the wave), each "lasted" test
+    (``amplitude`` signed by the wave, within ± the ceiling below), each "lasted" test
     ``elapsed + dt >= duration − dt / 2``; the compensation ramp ends at
     ``max(q̇₁, 2 q̇₀)``, the level ``ε τ_C`` capped by
     :func:`~leadthrough.friction.compensation.compensation_ceiling` (its ``max(·, 0)`` as
@@ -362,7 +374,15 @@ def _feed_forward_step(q, qd, level, gravity, friction_error, reference, push, r
             active[i] = active[i] and not parked
     for i in range(n):
         on = dithering and active[i]
+        compensated = fraction * level[i]
         dither = amplitude * level[i] if on else 0.0
+        if capped:
+            surely = (1.0 - friction_error[i]) * level[i]
+            cap = surely - gravity_uncertainty * abs(gravity[i] - reference[i])
+            cap = cap if cap > 0.0 or cap != cap else 0.0  # np.maximum(·, 0)
+            compensated = compensated if compensated < cap or compensated != compensated else cap
+            if dithering and (abs(dither) > cap or cap != cap):  # nor the dither (np.clip)
+                dither = cap if dither > 0.0 else -cap
         band = moving_velocity if on else dead_band
         full = 2.0 * band
         full = full if full > full_velocity or full != full else full_velocity
@@ -370,12 +390,6 @@ def _feed_forward_step(q, qd, level, gravity, friction_error, reference, push, r
         ramp = ramp if ramp > 0.0 or ramp != ramp else 0.0
         ramp = ramp if ramp < 1.0 or ramp != ramp else 1.0
         sign = 1.0 if qd[i] > 0.0 else (-1.0 if qd[i] < 0.0 else qd[i])  # np.sign (NaN, ±0)
-        compensated = fraction * level[i]
-        if capped:
-            surely = (1.0 - friction_error[i]) * level[i]
-            cap = surely - gravity_uncertainty * abs(gravity[i] - reference[i])
-            cap = cap if cap > 0.0 or cap != cap else 0.0  # np.maximum(·, 0)
-            compensated = compensated if compensated < cap or compensated != compensated else cap
         raw = (ramp * sign + (1.0 - ramp) * push[i]) * compensated
         filtered[i] = pole * filtered[i] + (1.0 - pole) * raw
         parts[0, i], parts[1, i] = filtered[i], dither
