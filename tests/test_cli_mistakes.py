@@ -212,7 +212,8 @@ def test_the_reported_mistakes_are_one_line(workdir, argv):
 @pytest.mark.parametrize(
     ("option", "flag"),
     [(["--joints", "1"], "--joints"), (["--save-log", "saved.csv"], "--save-log"),
-     (["--seed", "3"], "--seed"), (["--random-friction"], "--random-friction")],
+     (["--seed", "3"], "--seed"), (["--seed", "0"], "--seed"),
+     (["--random-friction"], "--random-friction")],
     ids=lambda value: value if isinstance(value, str) else " ".join(value),
 )  # fmt: skip
 def test_twin_options_on_a_real_arms_runs_are_refused(workdir, option, flag):

@@ -350,20 +350,24 @@ def test_a_delay_is_a_whole_number_of_periods_from_one(dynamics, friction, delay
 def test_the_dither_stays_under_the_compensations_ceiling(dynamics, friction):
     """Alone the dither moves no joint: within ± (1 − e) τ_C − gravity error, in both paths.
 
-    A joint whose level the model may overstate by 60 % keeps 0.4 τ_C of a 0.6 τ_C dither;
-    one where the gravity error may eat the whole level gets none; the others their whole
-    amplitude. The NumPy step and the compiled one agree.
+    Of a 0.6 τ_C dither, a joint whose level the model may overstate by 60 % keeps 0.4 τ_C,
+    one whose level is not known at all none, one whose gravity error may eat 0.5 τ_C of
+    the 0.8 τ_C surely there 0.3 τ_C, the others the whole amplitude; on both half-waves,
+    the compiled step and the NumPy one alike.
     """
     q = dynamics.robot.home()
     error = np.full(N, 0.2)
     error[1], error[3] = 0.6, 1.0  # joint 2 known to ±60 %, joint 4 not at all
-    settings = DitherParameters(amplitude=0.6)
     level = friction.coulomb_level(q)
+    reference = dynamics.gravity(q).copy()
+    reference[5] -= 0.5 * level[5] / 0.1  # joint 6: gravity_uncertainty · |ΔG| = 0.5 τ_C
+    expected = 0.6 * level
+    expected[1], expected[3], expected[5] = 0.4 * level[1], 0.0, 0.3 * level[5]
+    settings = DitherParameters(amplitude=0.6)
     for compiled in (True, False):
         feedforward = PassiveFeedForward(dynamics, friction, DT, dither=settings,
                                          friction_error=error, gravity_uncertainty=0.1)  # fmt: skip
         feedforward.compiled = compiled
-        dither = feedforward.step(q, np.zeros(N), t=0.0, gravity_reference=dynamics.gravity(q))
-        expected = 0.6 * level
-        expected[1], expected[3] = 0.4 * level[1], 0.0
-        np.testing.assert_allclose(np.abs(dither.dither), expected, rtol=1e-12, atol=1e-15)
+        for t, sign in ((0.0, 1.0), (0.04, -1.0)):  # both half-waves of the 15 Hz square
+            dither = feedforward.step(q, np.zeros(N), t=t, gravity_reference=reference).dither
+            np.testing.assert_allclose(dither, sign * expected, rtol=1e-12, atol=1e-15)

@@ -84,8 +84,8 @@ _TWIN_OPTIONS = {"joints": "--joints", "save_log": "--save-log", "seed": "--seed
 
 def _refuse_twin_options(args: argparse.Namespace) -> None:
     """A real arm's runs identify every joint that moved: twin-only options are mistakes."""
-    given = [flag for name, flag in _TWIN_OPTIONS.items()
-             if getattr(args, name) not in (None, False)]  # fmt: skip
+    given = [flag for name, flag in _TWIN_OPTIONS.items()  # `--seed 0` is given too
+             if getattr(args, name) is not None and getattr(args, name) is not False]  # fmt: skip
     if given:
         raise ParameterError(given[0], "applies to the twin's experiment and the project's "
                              "excitation logs only; a real arm's runs (--log, --realdata) "

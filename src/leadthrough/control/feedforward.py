@@ -140,7 +140,9 @@ class PassiveFeedForward:
         gravity_uncertainty: Relative error of G(q) [–] (masses, drive gains): with it the
             Coulomb compensation stays below its ceiling (the friction surely there minus
             ``gravity_uncertainty · |G(q) − G_ref|``, see :meth:`step`), so that a released
-            joint still stops. None: no ceiling (the thesis' law).
+            joint still stops, and the dither within ± the same ceiling
+            (:func:`dither_within`), so that alone it moves no joint. None: no ceiling (the
+            thesis' law).
     """
 
     #: Run :meth:`step` compiled (:func:`_feed_forward_step`); False runs the NumPy reference.
