@@ -10,6 +10,7 @@ import numpy as np
 
 from leadthrough.errors import ParameterError
 from leadthrough.experiments.friction_study import FrictionStudy, run_friction_study
+from leadthrough.friction.model import PARAMETER_COLUMNS
 from leadthrough.model.description import RobotDescription
 
 FIGURES = {
@@ -104,16 +105,13 @@ def summarise(study: FrictionStudy, out: Path) -> str:
     model, joints = study.model, study.report.joints
     source = (f"twin, {study.simulated_seconds:.0f} s of excitation" if study.truth is not None
               else "log file")  # fmt: skip
-    lines = [f"friction of {study.robot.name} identified from the {source} "
-             f"in {study.seconds:.1f} s of wall time", "",
-             f"{'joint':>5}{'τ_C [Nm]':>10}{'c [Nm s/rad]':>14}{'A [s/rad]':>11}"
-             f"{'B [rad/s]':>11}{'σ [Nm]':>9}{'k₁':>8}{'k₂':>8}"]  # fmt: skip
-    for j in joints:
-        lines.append(
-            f"{j + 1:>5}{model.coulomb[j]:>10.4f}{model.viscous[j]:>14.4f}{model.slope[j]:>11.0f}"
-            f"{model.half_width[j]:>11.2e}{model.noise_std[j]:>9.4f}"
-            f"{model.position_linear[j]:>8.3f}{model.position_quadratic[j]:>8.3f}"
-        )
+    lines = [
+        f"friction of {study.robot.name} identified from the {source} "
+        f"in {study.seconds:.1f} s of wall time",
+        "",
+        _fixed_width("joint", PARAMETER_COLUMNS),
+    ]
+    lines += [_fixed_width(str(j + 1), model.parameter_cells(j)) for j in joints]
     lines += ["", str(study.report)]
     missing = study.report.not_identified_note()
     if missing:
@@ -131,6 +129,16 @@ def summarise(study: FrictionStudy, out: Path) -> str:
             lines.append("  (–: the twin's true value is 0, no relative error)")
     lines.append(f"parameters: {out / 'friction.toml'}")
     return "\n".join(lines)
+
+
+#: Widths of the summary's columns: the joint, then :data:`PARAMETER_COLUMNS`.
+_WIDTHS = (5, 10, 14, 11, 11, 9, 8, 8)
+
+
+def _fixed_width(first: str, cells: Sequence[str]) -> str:
+    """One row of the summary's table, each cell right-aligned in its column."""
+    return "".join(f"{cell:>{width}}" for cell, width in zip((first, *cells), _WIDTHS,
+                                                             strict=True))  # fmt: skip
 
 
 def _percent(error: float) -> str:

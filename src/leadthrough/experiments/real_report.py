@@ -29,7 +29,7 @@ from leadthrough.friction.identification import (
     fit_friction,
     friction_samples,
 )
-from leadthrough.friction.model import FrictionModel
+from leadthrough.friction.model import PARAMETER_COLUMNS, FrictionModel
 from leadthrough.identification.dynamics import identify_dynamics
 from leadthrough.identification.prediction import prediction_error, rms
 from leadthrough.model.description import RobotDescription
@@ -122,13 +122,9 @@ def write_logs_report(
 
 def friction_values(friction: FrictionModel, joints: Sequence[int]) -> list[str]:
     """A Markdown table of the identified joints' friction parameters (SPEC §4 names)."""
-    rows = ["| joint | τ_C [Nm] | c [Nm s/rad] | A [s/rad] | B [rad/s] | σ [Nm] | k₁ | k₂ |",
-            "|---:|---:|---:|---:|---:|---:|---:|---:|"]  # fmt: skip
-    for j in joints:
-        rows.append(f"| {j + 1} | {friction.coulomb[j]:.4f} | {friction.viscous[j]:.4f} | "
-                    f"{friction.slope[j]:.0f} | {friction.half_width[j]:.2e} | "
-                    f"{friction.noise_std[j]:.4f} | {friction.position_linear[j]:.3f} | "
-                    f"{friction.position_quadratic[j]:.3f} |")  # fmt: skip
+    rows = ["| joint | " + " | ".join(PARAMETER_COLUMNS) + " |",
+            "|---:" * (len(PARAMETER_COLUMNS) + 1) + "|"]  # fmt: skip
+    rows += [f"| {j + 1} | " + " | ".join(friction.parameter_cells(j)) + " |" for j in joints]
     return rows
 
 

@@ -101,19 +101,16 @@ class FitReport:
         """Joints (0-based) not identified: their model values are the prior's."""
         return tuple(j for j in range(len(self.samples)) if j not in self.joints)
 
-    def not_identified_note(self, where: str = "friction.toml") -> str:
-        """One line naming the joints not identified (1-based), or "" when every one was.
-
-        ``where``: what keeps their prior values, as the user knows it.
-        """
+    def not_identified_note(self) -> str:
+        """One line naming the joints not identified (1-based), or "" when every one was."""
         joints = self.not_identified()
         if not joints:
             return ""
         names = ", ".join(str(j + 1) for j in joints)
         several = len(joints) > 1
         return (f"joint{'s' if several else ''} {names} not identified (not asked for, or "
-                f"never slid long enough in the logs): {where} keeps the robot file's nominal "
-                f"friction for {'them' if several else 'it'}")  # fmt: skip
+                f"never slid long enough in the logs): friction.toml keeps the robot file's "
+                f"nominal friction for {'them' if several else 'it'}")  # fmt: skip
 
     def __str__(self) -> str:
         lines = [f"{'joint':>5}{'samples':>9}{'RMS [Nm]':>10}{'±τ_C':>9}{'±c':>9}{'position':>10}"

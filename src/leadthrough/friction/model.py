@@ -62,6 +62,10 @@ def sigmoid(x: FloatArray) -> FloatArray:
     return 0.5 * (1.0 + np.tanh(0.5 * x))
 
 
+#: Column names of :meth:`FrictionModel.parameter_cells` (the thesis' symbols, with units).
+PARAMETER_COLUMNS = ("τ_C [Nm]", "c [Nm s/rad]", "A [s/rad]", "B [rad/s]", "σ [Nm]", "k₁", "k₂")
+
+
 @dataclass(frozen=True, eq=False)
 class FrictionModel:
     """Gaussian joint friction of n joints; every attribute is an (n,) array.
@@ -252,6 +256,13 @@ class FrictionModel:
         half_level = 0.5 * level
         return half_level * (upper + lower) + viscous, np.hypot(half_level * (upper - lower),
                                                                 self.noise_std)  # fmt: skip
+
+    def parameter_cells(self, joint: int) -> list[str]:
+        """Joint ``joint``'s parameters as text, in the order of :data:`PARAMETER_COLUMNS`."""
+        j = joint
+        return [f"{self.coulomb[j]:.4f}", f"{self.viscous[j]:.4f}", f"{self.slope[j]:.0f}",
+                f"{self.half_width[j]:.2e}", f"{self.noise_std[j]:.4f}",
+                f"{self.position_linear[j]:.3f}", f"{self.position_quadratic[j]:.3f}"]  # fmt: skip
 
     def to_dict(self) -> dict[str, list[float]]:
         """Plain-data form (lists per parameter) for TOML."""
