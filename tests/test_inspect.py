@@ -58,9 +58,14 @@ def test_inspect_the_link4_push_run(tmp_path, capsys):
     """pushes/link4.csv with the nominal UR10e: the three contacts, named joints, a report."""
     source = REALDATA / "ur10e" / "pushes" / "link4.csv"
     assert main(["inspect", str(source), "--out", str(tmp_path)]) == 0
-    printed = capsys.readouterr().out
-    assert "3 contact(s)" in printed
-    assert "note: ur10e: drive data assumed" in printed
+    printed = capsys.readouterr()
+    assert "3 contact(s)" in printed.out
+    # after the summary, on stderr, as identify warns (one line: cli.arguments.one_line_warnings)
+    assert "drive data assumed" not in printed.out
+    assert "leadthrough: warning: ur10e: drive data assumed" in printed.err
+    # the samples as logged (jittered stamps), and those the observer ran on, resampled
+    report = (tmp_path / "report.md").read_text()
+    assert "1896 samples over 19.7 s" in report and "median period: 1968 samples" in report
 
 
 def test_inspect_says_where_the_supervisor_would_fault(ur10e, tmp_path, capsys):

@@ -74,3 +74,33 @@ def test_unloaded_runs_read_no_payload(ur10e):
     paired = lt.estimate_payload(first, ur10e, unloaded=[second])
     assert abs(paired.mass) < 0.1, paired
     assert abs(paired.mass) <= 3 * paired.mass_std, paired
+
+
+def test_an_identified_models_friction_noise_hides_pushes_that_the_nominal_noise_shows(ur10e):
+    """link4.csv, the model identified on the excitation runs (README *With the identified model*).
+
+    Its own friction noise σ (the currents' scatter at 100 Hz, 2.5 / 3.5 / 1.4 Nm on joints
+    1–3) slows the thesis' observer (``Q_m = σ²``) so that none of the three pushes is
+    detected; with the nominal σ the same model finds all three, the elbow's and the two
+    stops, with joint 1's peak within 25 % of the nominal model's. When σ is read at the
+    log's rate instead, the first half fails: update the README.
+    """
+    from dataclasses import replace
+
+    from leadthrough.experiments.real_dynamics import ur10e_dynamics_study
+    from leadthrough.friction.model import FrictionModel
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        identified = ur10e_dynamics_study(REALDATA).identified
+    own = FrictionModel.from_robot(identified)
+    nominal_noise = replace(own, noise_std=FrictionModel.from_robot(ur10e).noise_std)
+    assert np.all(own.noise_std[:3] > 4.0 * nominal_noise.noise_std[:3])
+    log = read("pushes/link4.csv", identified)
+    assert lt.detect_contacts(log, identified, own) == []
+    found = lt.detect_contacts(log, identified, nominal_noise)
+    reference = lt.detect_contacts(read("pushes/link4.csv", ur10e), ur10e, None)
+    assert len(found) == len(reference) == 3
+    for event, nominal in zip(found, reference, strict=True):
+        assert event.start < nominal.end and nominal.start < event.end  # the same push
+        assert event.peak[0] == pytest.approx(nominal.peak[0], rel=0.25)

@@ -48,6 +48,6 @@ def inspect(args: argparse.Namespace) -> int:
         print(f"  {event.start - observed.t[0]:7.2f} … {event.end - observed.t[0]:7.2f} s  "
               f"joints {joints}  peak {event.peak_torque:.1f} Nm")  # fmt: skip
     print(f"report: {report}")
-    for note in notes:
-        print(f"note: {note.message}")
+    for note in notes:  # on stderr, one line each, as identify's (cli.arguments.one_line_warnings)
+        warnings.warn_explicit(note.message, note.category, note.filename, note.lineno)
     return 0

@@ -43,6 +43,8 @@ class Inspection:
         robot: Name of the model used.
         fault: Where the supervisor would fault over the log as recorded: (time from its
             start [s], the reason), or None (:func:`supervisor_verdict`).
+        logged: Samples in the log as recorded (``observed`` is resampled onto a uniform
+            grid at its median period); 0: not known.
     """
 
     observed: ObservedLog
@@ -50,6 +52,7 @@ class Inspection:
     table: dict[str, FloatArray]
     robot: str
     fault: tuple[float, str] | None = None
+    logged: int = 0
 
 
 def supervisor_verdict(log: JointLog, robot: RobotDescription) -> tuple[float, str] | None:
@@ -78,7 +81,7 @@ def inspect_log(
     observed = observe_log(log, robot, friction, uncertainty)
     events = run_detector(observed, parameters)
     return Inspection(observed, events, false_alarm_table([observed]), robot.name,
-                      supervisor_verdict(log, robot))  # fmt: skip
+                      supervisor_verdict(log, robot), int(log.t.size))  # fmt: skip
 
 
 def false_alarm_markdown(table: dict[str, FloatArray], label: str = "") -> str:
@@ -127,9 +130,10 @@ def write_inspection(inspection: Inspection, source: str, out: Path) -> Path:
     text = [
         f"# Inspection of {source}",
         "",
-        f"Model: {inspection.robot}. {observed.t.size} samples over "
+        f"Model: {inspection.robot}. {inspection.logged or observed.t.size} samples over "
         f"{observed.t[-1] - observed.t[0]:.1f} s, observer at {1 / observed.dt:.0f} Hz (the "
-        "log's median period). The std is the observer's and the model uncertainty combined.",
+        f"log's median period: {observed.t.size} samples). The std is the observer's and the "
+        "model uncertainty combined.",
         "",
         "## Safety supervisor",
         "",
