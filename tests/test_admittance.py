@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+import leadthrough as lt
 from leadthrough.control.admittance import (
     AdmittanceState,
     admittance_step,
@@ -27,7 +28,7 @@ def test_undamped_step_is_newtons_law_on_the_virtual_inertia():
     """D̃ = 0: q̇_ref grows by dt (k_M M)⁻¹ τ, q_ref by dt q̇_ref⁺."""
     state = AdmittanceState(np.array([0.1, -0.2]), np.array([0.05, 0.0]))
     tau = np.array([1.0, -0.5])
-    after = admittance_step(state, tau, MASS, 0.3, np.zeros(2), DT)
+    after = admittance_step(state, tau, MASS, 0.3, np.zeros((2, 2)), DT)
     expected = state.qd_ref + DT * np.linalg.solve(0.3 * MASS, tau)
     np.testing.assert_allclose(after.qd_ref, expected, rtol=1e-12)
     np.testing.assert_allclose(after.q_ref, state.q_ref + DT * expected, rtol=1e-12)
@@ -39,7 +40,7 @@ def test_constant_torque_settles_at_the_damped_speed_for_any_damping(damping):
     state, tau = AdmittanceState(np.zeros(2), np.zeros(2)), np.array([1.0, 1.0])
     speeds = []
     for _ in range(20000):
-        state = admittance_step(state, tau, MASS, 0.3, np.full(2, damping), DT)
+        state = admittance_step(state, tau, MASS, 0.3, np.diag(np.full(2, damping)), DT)
         speeds.append(state.qd_ref.copy())
     np.testing.assert_allclose(state.qd_ref, tau / damping, rtol=1e-3)
     assert np.max(np.abs(speeds)) <= np.max(tau / damping) * (1 + 1e-9) + 1e-12
@@ -127,12 +128,35 @@ def test_operator_weight_silences_what_the_model_may_read_and_passes_a_real_push
 
 
 def test_virtual_damping_rises_smoothly_where_nobody_pushes():
-    """m/T on a pushed joint, (1 + B) m/T on one with weight 0, monotone in between."""
-    inertia = np.array([2.0, 0.5, 1.0])
-    damping = virtual_damping(inertia, 0.25, 5.0, np.array([1.0, 0.0, 0.5]))
-    np.testing.assert_allclose(damping, [2.0 / 0.25, 6.0 * 0.5 / 0.25, 6.0 / 3.5 / 0.25])
+    """m_ii/T on a pushed joint, (1 + B) m_ii/T on one with weight 0, monotone in between."""
+    mass = np.array([[2.0, 0.3, 0.1], [0.3, 0.5, 0.05], [0.1, 0.05, 1.0]])
+    damping = virtual_damping(mass, 0.25, 5.0, np.array([1.0, 0.0, 0.5]))
+    np.testing.assert_allclose(np.diag(damping), [2.0 / 0.25, 6.0 * 0.5 / 0.25, 6.0 / 3.5 / 0.25])
+    np.testing.assert_allclose(damping, damping.T)  # symmetric
+    assert np.all(np.linalg.eigvalsh(damping) > 0.0)  # and positive definite: it dissipates
     weights = np.linspace(0.0, 1.0, 101)
-    assert np.all(np.diff(virtual_damping(np.ones(101), 0.25, 5.0, weights)) < 0.0)
+    diagonal = [virtual_damping(np.eye(1), 0.25, 5.0, np.array([w]))[0, 0] for w in weights]
+    assert np.all(np.diff(diagonal) < 0.0)
+
+
+def test_pushed_everywhere_the_damping_is_the_arms_inertia_over_its_time():
+    """Every weight 1: D̃ = M / T, so a steady torque settles at q̇ = T M⁻¹ τ.
+
+    On the YuMi at home a force at the tool then moves the tool at T J M⁻¹ Jᵀ F, the
+    arm's own mobility there (a diagonal m_ii / T would give T J diag(M)⁻¹ Jᵀ F).
+    """
+    robot = lt.robots.yumi()
+    dynamics = lt.Dynamics(robot)
+    q = robot.home()
+    mass, jacobian = dynamics.mass(q), dynamics.jacobian(q)[:3]
+    damping = virtual_damping(mass, 0.5, 20.0, np.ones(robot.n_joints))
+    np.testing.assert_allclose(damping, mass / 0.5, rtol=1e-12)
+    force = np.array([0.0, 0.0, 5.0])  # [N], upwards
+    state = AdmittanceState(q.copy(), np.zeros(robot.n_joints))
+    for _ in range(5000):  # 20 s, 20 time constants of k_M T = 1 s
+        state = admittance_step(state, jacobian.T @ force, mass, 2.0, damping, DT)
+    mobility = jacobian @ np.linalg.solve(mass, jacobian.T)
+    np.testing.assert_allclose(jacobian @ state.qd_ref, 0.5 * mobility @ force, rtol=1e-6)
 
 
 def test_damping_weight_counts_the_push_that_starts_or_sustains_a_motion():

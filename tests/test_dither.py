@@ -208,3 +208,21 @@ def test_valid_edge_parameters_accepted():
     assert DitherParameters(amplitude=0.999).amplitude == 0.999
     assert DitherParameters(amplitude=0.0).amplitude == 0.0
     assert DitherParameters(rest_time=0.0).rest_time == 0.0
+
+
+def test_each_mode_takes_its_amplitude_unless_one_is_given():
+    """Passive mode the thesis' 0.3 τ_C, active mode twice it; a given amplitude in both."""
+    import dataclasses
+
+    from leadthrough.control.dither import ACTIVE_AMPLITUDE, PASSIVE_AMPLITUDE
+
+    robot = lt.robots.yumi()
+    assert (PASSIVE_AMPLITUDE, ACTIVE_AMPLITUDE) == (0.3, 0.6)
+    for mode, expected in (("passive", 0.3), ("active", 0.6)):
+        controller = lt.LeadThrough(robot, mode=mode, dt=DT)
+        assert controller.feed_forward.dither.amplitude == expected
+        given = dataclasses.replace(lt.LeadThroughParameters(mode=mode),
+                                    dither=DitherParameters(amplitude=0.4))  # fmt: skip
+        controller = lt.LeadThrough(robot, mode=mode, dt=DT, parameters=given)
+        assert controller.feed_forward.dither.amplitude == 0.4
+    assert Dither(lt.FrictionModel.from_robot(robot), DT).amplitude == 0.3  # on its own

@@ -205,7 +205,7 @@ def _feed_forward_run(parameters: DitherParameters | None, clock: bool, compiled
         push = rng.uniform(-1.0, 1.0, 7) if pushed and k % 3 else None
         parts = feed_forward.step(q, qd, None, 1.7e9 + 0.004 * k if clock else None, reference,
                                   push)  # fmt: skip
-        state = [] if dither is None else [dither.active, [dither.parked]]
+        state = [] if dither is None else [dither.active, [dither.parked], dither.crept]
         if delay is not None:
             state.append(parts.dither_in_measurement)
         rows.append(np.concatenate([parts.friction, parts.dither, parts.total, *state]))
@@ -235,7 +235,8 @@ def test_compiled_feed_forward_equals_the_numpy_reference(park_time, creep, cloc
         assert 0.05 < np.mean(lower[moving]) < 0.95
     if dithered:
         assert 0.05 < np.mean(reference[:, 21:28]) < 0.95  # both decisions are taken
-        assert reference[:, 28].any() == (park_time is not None or creep is not None)
+        assert reference[:, 28].any() == (park_time is not None)  # every joint parked
+        assert reference[:, 29:36].any() == (creep is not None)  # a joint that crept
     compensating = np.abs(reference[:, :7]) > 1e-9
     assert 0.05 < np.mean(compensating) < 0.95  # both sides of the dead-band
     np.testing.assert_allclose(compiled, reference, rtol=1e-12, atol=1e-12, equal_nan=True)

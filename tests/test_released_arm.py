@@ -22,6 +22,7 @@ import leadthrough as lt
 from as_found import (
     constant_gravity_bias,
     constant_level_error,
+    diagonal_damping,
     friction_margin_share,
     observer_readings,
     own_rest_bands,
@@ -282,12 +283,14 @@ def test_damping_on_the_operator_weight_lets_the_released_arm_coast(monkeypatch)
     with the dither parked after 2 s, as then: parked after 0.5 s it ends the coast; and
     with the levels read known to the calibration's 20 % everywhere, as then: known to
     their readings near the pose, it stops after 0.52 s and 0.6 mrad (0.57 s, 1.4 mrad);
-    and with the thesis' compensation, as then.
+    and with the thesis' compensation, the diagonal damping and the thesis' dither in
+    active mode, as then (with today's damping it stops within 0.13 s).
     """
     two_second_park(monkeypatch)
     constant_level_error(monkeypatch)
     unread_torque_offset(monkeypatch)
     thesis_compensation(monkeypatch)
+    diagonal_damping(monkeypatch)
 
     def factory(robot, mode):
         parameters = lt.LeadThroughParameters(unwind_time=None)
@@ -320,11 +323,13 @@ def test_a_stopped_joint_is_not_held_against_stiction_by_the_tracking_spring(set
     the settled one 0.34. Without the unwinding of a lagging joint's reference, as when
     the case was found: with it the held reference creeps 0.59 mrad, the settled 0.37. With
     the calibration and the dither (parked after 2 s) of the time: parked after 0.5 s,
-    the dither ends the creep either way. And with the gravity error kept constant.
+    the dither ends the creep either way. And with the gravity error kept constant, the
+    diagonal damping and the thesis' dither in active mode.
     """
     _calibration_of_the_time(monkeypatch)
     two_second_park(monkeypatch)
     constant_gravity_bias(monkeypatch)
+    diagonal_damping(monkeypatch)
     if not settled:
         monkeypatch.setattr(active_law, "settled_reference", lambda q_ref, *args: q_ref)
 
@@ -532,13 +537,16 @@ def test_a_refused_calibration_that_read_a_level_low_still_stops_the_released_ar
     """Refused, the run's low reading of joint 1 still widens its friction error: it stops.
 
     Without (the refused calibration left no trace) the model's level, about twice the
-    plant's, reads as a push along the motion that the 0.35 margin does not cover. With the
+    plant's, reads as a push along the motion that the 0.35 margin does not cover (with
+    the diagonal damping and the thesis' dither of the time: with today's it drifts 3.8
+    mrad, past the budget still). With the
     observer's readings of the time: the momentum balance reads joint 1 at 0.64× (the
     plant's 0.65×), inside the plausible band, and the calibration is accepted. And with
     the 6 Hz loop of the time: the 4 Hz one reads joint 1 inside the band too.
     """
     observer_readings(monkeypatch)
     six_hertz_calibration(monkeypatch)
+    diagonal_damping(monkeypatch)
     if not widened:
         monkeypatch.setattr(Calibration, "lowered", lambda self: np.ones(7))
     result = run_case(READ_LOW, "active")

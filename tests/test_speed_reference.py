@@ -39,8 +39,10 @@ off its motion keeping none of its friction (``CalibrationParameters.bandwidth``
 ``CalibrationRun.runaway``), then the calibration's gravity error taken as a relative error
 of G as far as a drive gain explains it (``calibration.gravity_share``), then a resting
 reference drawn only to a joint that rests itself (``admittance.settled_reference``), then
-the dither kept under the compensation's ceiling (``feedforward.dither_within``). A faster
-step must reproduce them.
+the dither kept under the compensation's ceiling (``feedforward.dither_within``), then
+active mode's virtual damping shaped like the arm's inertia (``admittance.virtual_damping``),
+its dither twice the thesis' (``dither.ACTIVE_AMPLITUDE``) and a creep parking only the
+joint that crept (``DitherParameters.creep``). A faster step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

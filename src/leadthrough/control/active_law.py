@@ -419,7 +419,7 @@ class ActiveLaw:
                                   self._settle_rate, motion_sign(qd, p.rest_velocity))  # fmt: skip
         references = AdmittanceState(q_ref, references.qd_ref)
         rest = self._admittance_scalars[_REST_DAMPING]  # 0 while the device is held
-        damping = virtual_damping(inertia, p.damping_time, rest, self.damping_weight)
+        damping = virtual_damping(mass, p.damping_time, rest, self.damping_weight)
         velocity = admittance_step(references, drive, mass, p.inertia_scale, damping,
                                    self.dt).qd_ref  # fmt: skip
         if p.limit_aware:

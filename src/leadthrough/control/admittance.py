@@ -1,9 +1,10 @@
 """The admittance rule of active lead-through (thesis §6.2, SPEC §6): a small pure core.
 
 The virtual system the operator feels is ``M̃(q) q̈_ref + D̃ q̇_ref = τ_in`` with
-``M̃ = k_M M(q)`` and ``D̃`` diagonal (eq. 6.5, written on the reference velocity so
-that the virtual system is self-contained), integrated with implicit Euler in the
-damping so that it is stable for any D̃::
+``M̃ = k_M M(q)`` and ``D̃ = S M(q) S / T`` shaped like the arm's inertia too (eq. 6.5,
+written on the reference velocity so that the virtual system is self-contained; ``S``
+diagonal, the identity while every joint is pushed: :func:`virtual_damping`), integrated
+with implicit Euler in the damping so that it is stable for any D̃::
 
     (M̃ + dt D̃) q̇_ref⁺ = M̃ q̇_ref + dt τ_in,     q_ref⁺ = q_ref + dt q̇_ref⁺
 
@@ -62,11 +63,11 @@ def admittance_step(
         tau_in: Torque driving the virtual system (estimated operator torque, constraints).
         mass: M(q) [kg m²], (n, n).
         inertia_scale: k_M [–].
-        damping: Diagonal of D̃ [Nm s/rad], (n,).
+        damping: D̃ [Nm s/rad], (n, n) (:func:`virtual_damping`).
         dt: Control period [s].
     """
     virtual_mass = inertia_scale * mass
-    lhs = virtual_mass + dt * np.diag(damping)
+    lhs = virtual_mass + dt * damping
     qd_ref = cast(FloatArray, np.linalg.solve(lhs, virtual_mass @ state.qd_ref + dt * tau_in))
     return AdmittanceState(state.q_ref + dt * qd_ref, qd_ref)
 
@@ -284,25 +285,35 @@ def settled_reference(
 
 
 def virtual_damping(
-    inertia: FloatArray, damping_time: float, rest_scale: float, weight: FloatArray
+    mass: FloatArray, damping_time: float, rest_scale: float, weight: FloatArray
 ) -> FloatArray:
-    """Diagonal of D̃ [Nm s/rad]: ``m_ii / damping_time`` while guiding, heavier without.
+    """D̃ = S M(q) S / damping_time [Nm s/rad], (n, n): the arm's inertia, heavier where unpushed.
 
-    ``D̃_ii = m_ii / damping_time · (1 + B) / (1 + B w_i)`` with ``w_i`` the joint's
-    :func:`damping_weight` and ``B = rest_scale``: a joint's damping rises smoothly to
-    ``1 + B`` times its guiding value as its weight falls to 0 (the operator lets go,
-    does not push that joint, or holds it back). A released joint then stops within
-    about ``k_M · damping_time / (1 + B)``, and a model error ``e`` that leaks through
-    the weight moves it at ``e w (1 + B w) / ((1 + B) D̃_guide)``, quadratically slower
-    as the weight fades, instead of coasting at ``e / D̃``.
+    ``S = diag(√((1 + B) / (1 + B w_i)))`` with ``w_i`` the joint's
+    :func:`damping_weight` and ``B = rest_scale``: a joint's damping (``D̃_ii = m_ii /
+    damping_time · (1 + B) / (1 + B w_i)``) rises smoothly to ``1 + B`` times its
+    guiding value as its weight falls to 0 (the operator lets go, does not push that
+    joint, or holds it back). A released joint then stops within about ``k_M ·
+    damping_time / (1 + B)``, and a model error ``e`` that leaks through the weight
+    moves it at ``e w (1 + B w) / ((1 + B) D̃_guide)``, quadratically slower as the weight
+    fades, instead of coasting at ``e / D̃``.
+
+    Shaped like M(q), not only its diagonal: while every joint is pushed the arm settles
+    at ``q̇ = damping_time · M⁻¹ τ``, every motion of the arm on the same time constant
+    ``k_M · damping_time``, and a force ``F`` at the tool (``τ = Jᵀ F``) moves the tool at
+    ``damping_time · J M⁻¹ Jᵀ F``, the arm's own mobility there. A diagonal ``m_ii /
+    damping_time`` answers each joint's share of the torque on its own, the lightest
+    joints (a wrist) fastest whatever the rest of the arm does (design log, *Damping
+    shaped like the arm*).
 
     Args:
-        inertia: Diagonal of M(q) [kg m²].
+        mass: M(q) [kg m²], (n, n).
         damping_time: Time constant m_ii / D̃_ii while guiding [s].
         rest_scale: Extra damping, in multiples, once nobody pushes [–].
         weight: :func:`damping_weight` of every joint.
     """
-    return inertia / damping_time * (1.0 + rest_scale) / (1.0 + rest_scale * weight)
+    scale = np.sqrt((1.0 + rest_scale) / (1.0 + rest_scale * weight))
+    return scale[:, None] * mass * scale[None, :] / damping_time
 
 
 def braking_cap(

@@ -4,15 +4,17 @@ A square wave of 15 Hz and 0.3·τ_C is added to the feed-forward of each joint 
 at rest: too small to move the joint, it keeps the gearbox vibrating, which lowers the
 torque the operator needs to start a motion, and so the torque the momentum observer
 cannot see. It is switched off on a joint as soon as that joint moves, and back on
-after the joint has rested for a while. While every joint rests it parks (off on every
-joint until one moves) as soon as a joint creeps under it, or after a longer rest: on
-a load the model does not know, "too small to move the joint" is not true. Its torque
-must be removed from the observer's input, and the friction compensation's dead-band
-is widened while it is on.
+after the joint has rested for a while. While every joint rests, a joint that creeps
+under it is parked (its dither off until a joint moves): on a load the model does not
+know, "too small to move the joint" is not true there, while the joints that do not
+creep go on dithering and showing a push. After a longer rest every joint parks. Its
+torque must be removed from the observer's input, and the friction compensation's
+dead-band is widened while it is on.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -24,6 +26,16 @@ from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray
 from leadthrough.validation import real
 
+#: The thesis' amplitude (§5.3), a fraction of τ_C [–]: passive mode's.
+PASSIVE_AMPLITUDE = 0.3
+#: Active mode's amplitude, a fraction of τ_C [–]. A loaded joint breaks away at
+#: ``τ_s − a τ_C``: the hand starts a motion with less force and stiction hides less of
+#: its push. Twice the thesis' lightens active mode by 0.11–0.13 of passive's effort on
+#: the guiding benchmark, and shakes it less, with the creep parked per joint and the
+#: virtual damping shaped like the arm (design log, *A dither twice as strong, kept*);
+#: passive mode keeps the thesis' dither, the baseline active mode is judged against.
+ACTIVE_AMPLITUDE = 0.6
+
 
 @dataclass(frozen=True)
 class DitherParameters:
@@ -31,22 +43,30 @@ class DitherParameters:
 
     Attributes:
         frequency: Square-wave frequency [Hz] (15: below the resonances of Fig. 5.3).
-        amplitude: Amplitude as a fraction of each joint's Coulomb level [–] (0.3).
+        amplitude: Amplitude as a fraction of each joint's Coulomb level [–]; None: the
+            mode's (:meth:`for_mode`), the thesis' 0.3 in passive mode and on its own,
+            :data:`ACTIVE_AMPLITUDE` in active mode.
         moving_velocity: A joint moves above this speed [rad/s]: dither off at once, and the
             friction compensation dead-band while dithering. Under a
             :class:`~leadthrough.control.lead_through.LeadThrough` this is its
             ``rest_velocity``, the one definition of "at rest".
         rest_time: Time below ``moving_velocity`` before the dither comes back [s].
         park_time: Once *every* joint has rested this long, nobody is guiding the arm: the
-            dither stops until a joint moves again [s]; None: only a creep parks it. A joint
+            dither stops until a joint moves again [s]; None: only a creep parks (the
+            joint that crept). A joint
             counts as resting here when its velocity or its velocity low-passed over one
             dither period (:attr:`Dither.slow_velocity`) is below ``moving_velocity``: a
             joint being guided moves by both, while the slips the dither causes, its twitch
             and the tail of a stop move by one only.
         creep: While every joint rests, a dithered joint whose position (low-passed over one
             dither period from where the joint came to rest, :attr:`Dither.slow_position`)
-            moves this far from where its dither found it parks the dither at once [rad];
-            None: only ``park_time`` parks it. A dithered joint under a static load the
+            moves this far from where its dither found it parks its own dither at once,
+            until a joint moves [rad]; None: only ``park_time`` parks. The others dither
+            on: parked on every joint, the push a hand starts on a loaded joint stayed
+            hidden until it broke away (design log, *A creep park per joint*). Where the
+            dither found a joint is kept through a twitch that passes
+            ``moving_velocity``: reset there, a twitching joint's creep was never counted.
+            A dithered joint under a static load the
             model does not know (a mass error, a drive gain) creeps, 0.6–2 mrad/s on the
             guiding benchmark's LuGre plants without a start-up calibration, against a
             released arm's budget of 1 mrad: the dither, meant to show a push without
@@ -58,7 +78,7 @@ class DitherParameters:
     """
 
     frequency: float = 15.0
-    amplitude: float = 0.3
+    amplitude: float | None = None
     moving_velocity: float = 0.01
     rest_time: float = 0.2
     park_time: float | None = 2.0
@@ -66,15 +86,23 @@ class DitherParameters:
 
     def __post_init__(self) -> None:
         real("frequency", self.frequency, minimum=0.0, strict=True, error=ParameterError)
-        real("amplitude", self.amplitude, minimum=0.0, error=ParameterError)
-        if self.amplitude >= 1.0:
-            raise ParameterError("amplitude", "must stay below 1 (it must not move the joint)")
+        if self.amplitude is not None:
+            real("amplitude", self.amplitude, minimum=0.0, error=ParameterError)
+            if self.amplitude >= 1.0:
+                raise ParameterError("amplitude", "must stay below 1 (it must not move the joint)")
         real("moving_velocity", self.moving_velocity, minimum=0, strict=True, error=ParameterError)
         real("rest_time", self.rest_time, minimum=0.0, error=ParameterError)
         if self.park_time is not None:
             real("park_time", self.park_time, minimum=0.0, strict=True, error=ParameterError)
         if self.creep is not None:
             real("creep", self.creep, minimum=0.0, strict=True, error=ParameterError)
+
+    def for_mode(self, mode: str) -> DitherParameters:
+        """These settings with the amplitude of ``mode`` (``"passive"`` or ``"active"``) if None."""
+        if self.amplitude is not None:
+            return self
+        amplitude = ACTIVE_AMPLITUDE if mode == "active" else PASSIVE_AMPLITUDE
+        return dataclasses.replace(self, amplitude=amplitude)
 
     @classmethod
     def never_parked(cls, **changes: float) -> DitherParameters:
@@ -101,7 +129,9 @@ class Dither:
     def __init__(
         self, friction: FrictionModel, dt: float, parameters: DitherParameters | None = None
     ) -> None:
-        self.parameters = parameters or DitherParameters()
+        self.parameters = (parameters or DitherParameters()).for_mode("passive")
+        #: Amplitude in use, a fraction of τ_C [–] (the parameters' or the thesis').
+        self.amplitude = float(self.parameters.amplitude or 0.0)
         self.friction = friction
         self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
         self.reset()
@@ -121,13 +151,16 @@ class Dither:
 
     @property
     def parked(self) -> bool:
-        """Whether every joint has rested for ``park_time``, or a joint crept: the dither is off."""
+        """Whether every joint has rested for ``park_time``: the dither is off on every joint."""
         park_time, quiet_since = self.parameters.park_time, self._quiet_since
         if quiet_since is None:
             return False
-        if quiet_since == -math.inf:  # a creep (:meth:`decide`)
-            return True
         return park_time is not None and bool(self._lasted(self._now - quiet_since, park_time))
+
+    @property
+    def crept(self) -> NDArray[np.bool_]:
+        """The joints that crept ``creep`` under the dither: parked until a joint moves."""
+        return np.asarray(self._anchor == -np.inf)
 
     def _lasted(self, elapsed: FloatArray | float, duration: float) -> NDArray[np.bool_]:
         """Whether samples spanning ``elapsed`` [s] (each one period) cover ``duration`` [s].
@@ -188,16 +221,14 @@ class Dither:
         """Where the dither found each joint while every joint rests [rad]; NaN: none.
 
         The :attr:`slow_position` when the joint's dither came on (or when every joint
-        came to rest, if later). The array itself: a compiled step updates it in place.
+        came to rest, if later), kept until a joint moves; −inf: the joint crept
+        (:attr:`crept`). The array itself: a compiled step updates it in place.
         """
         return self._anchor
 
     @property
     def quiet_since(self) -> float:
-        """When every joint came to rest [s since the first sample]; NaN: a joint moves.
-
-        −inf once a joint crept (``creep``): parked until a joint moves.
-        """
+        """When every joint came to rest [s since the first sample]; NaN: a joint moves."""
         return math.nan if self._quiet_since is None else self._quiet_since
 
     @quiet_since.setter
@@ -239,8 +270,8 @@ class Dither:
             self._quiet_since = now
         rested = self._lasted(now - self._rest_since, p.rest_time)
         self._watch_creep(rested)
-        self.active = rested if not self.parked else np.zeros_like(rested)
-        return np.where(self.active, wave * p.amplitude * self.friction.coulomb_level(q), 0.0)
+        self.active = rested & ~self.crept if not self.parked else np.zeros_like(rested)
+        return np.where(self.active, wave * self.amplitude * self.friction.coulomb_level(q), 0.0)
 
     def _filter_position(self, q: FloatArray, stopped: NDArray[np.bool_]) -> None:
         """Low-pass the joint readings over one dither period (a NaN reading leaves it).
@@ -254,16 +285,20 @@ class Dither:
         self._position = np.where(np.isfinite(q), filtered, position)
 
     def _watch_creep(self, rested: NDArray[np.bool_]) -> None:
-        """Anchor the rested joints while every joint rests; park once one moved ``creep``."""
-        if self._quiet_since is None:  # a joint moves: no anchors
+        """Anchor the rested joints while every joint rests; park one that moved ``creep``.
+
+        An anchor stays until a joint moves (a twitch past ``moving_velocity`` does not
+        reset it); a joint that crept from it is marked −inf (:attr:`crept`).
+        """
+        if self._quiet_since is None:  # a joint moves: no anchors, nothing parked
             self._anchor = np.full_like(self._anchor, np.nan)
             return
-        anchored = np.isfinite(self._anchor)
+        anchor = self._anchor
+        anchored = np.isfinite(anchor)
         # a joint that moved away from its anchor (checked before this sample's new ones)
-        crept = anchored & (np.abs(self._position - self._anchor) > self._creep_limit)
-        self._anchor = np.where(rested, np.where(anchored, self._anchor, self._position), np.nan)
-        if np.any(crept):
-            self._quiet_since = -math.inf
+        crept = anchored & (np.abs(self._position - anchor) > self._creep_limit)
+        kept = np.where(rested & np.isnan(anchor), self._position, anchor)
+        self._anchor = np.where(crept, -np.inf, kept)
 
     @property
     def _creep_limit(self) -> float:

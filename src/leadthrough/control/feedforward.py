@@ -238,7 +238,7 @@ class PassiveFeedForward:
                                self._no_active, compensation.filtered, parts, False, 0.0,
                                math.nan, 0.0, self._scalars)  # fmt: skip
         else:
-            amplitude = wave * dither.parameters.amplitude
+            amplitude = wave * dither.amplitude
             dither.quiet_since = _feed_forward_step(q, velocity, level, gravity, *errors,
                 dither.rest_since, dither.slow_velocity, dither.slow_position, dither.anchor,
                 dither.active, compensation.filtered, parts, True, now, dither.quiet_since,
@@ -314,9 +314,10 @@ def _feed_forward_step(q, qd, level, gravity, friction_error, reference, push, r
     restarted from the reading where a joint comes to rest),
     the park (a joint rests if either velocity is below ``moving_velocity``;
     ``quiet_since`` NaN: not every joint rests; ``park_time`` inf: never), the creep
-    (``anchor`` each rested joint's position while every joint rests, NaN otherwise; an
-    anchored joint farther than ``creep`` from it sets ``quiet_since`` to −inf: parked;
-    ``creep`` inf: never), the rested joints and their dither ``amplitude · τ_C(q)`` [Nm]
+    (``anchor`` each rested joint's position while every joint rests, kept until a joint
+    moves, NaN otherwise; an anchored joint farther than ``creep`` from it gets −inf: that
+    joint parked; ``creep`` inf: never), the rested joints and their dither
+    ``amplitude · τ_C(q)`` [Nm]
     (``amplitude`` signed by the wave, within ± the ceiling below), each "lasted" test
     ``elapsed + dt >= duration − dt / 2``; the compensation ramp ends at
     ``max(q̇₁, 2 q̇₀)``, the level ``ε τ_C`` capped by
@@ -355,22 +356,17 @@ def _feed_forward_step(q, qd, level, gravity, friction_error, reference, push, r
             quiet_since = math.nan
         elif quiet_since != quiet_since:
             quiet_since = now
-        crept = False
         for i in range(n):
             rested = (now - rest_since[i]) + dt >= rest_time - 0.5 * dt
-            active[i] = rested
-            if quiet_since != quiet_since:
+            if quiet_since != quiet_since:  # a joint moves: no anchors, nothing parked
                 anchor[i] = math.nan
-                continue
-            if abs(position[i] - anchor[i]) > creep:  # False for a NaN anchor
-                crept = True
-            if not rested:
-                anchor[i] = math.nan
-            elif anchor[i] != anchor[i]:
-                anchor[i] = position[i]
-        if crept:
-            quiet_since = -math.inf
-        # False for a NaN quiet_since; park_time inf: only a creep (quiet_since −inf) parks
+            elif anchor[i] != -math.inf:  # −inf: crept, parked
+                if abs(position[i] - anchor[i]) > creep:  # False for a NaN anchor
+                    anchor[i] = -math.inf
+                elif rested and anchor[i] != anchor[i]:  # kept through a twitch
+                    anchor[i] = position[i]
+            active[i] = rested and anchor[i] != -math.inf
+        # False for a NaN quiet_since; park_time inf: never
         parked = (now - quiet_since) + dt >= park_time - 0.5 * dt
         for i in range(n):
             active[i] = active[i] and not parked

@@ -225,15 +225,15 @@ def admittance_law(q, qd, drive, constraint, mass, residuals, uncertainty, joint
         own = w / math.sqrt(w * w + rest_velocity * rest_velocity)
         resting = (1.0 - abs(moving)) * (1.0 - abs(own))
         q_ref[i] += settle * (resting * (1.0 - damping_weight[i])) * (q[i] - q_ref[i])
-    for i in range(n):
+    for i in range(n):  # D̃ = S M S / T, S_ii = √((1 + B) / (1 + B w_i)): virtual_damping
         total = 0.0
+        s_i = math.sqrt((1.0 + rest) / (1.0 + rest * damping_weight[i]))
         for j in range(n):
             virtual = scale * mass[i, j]
-            work[i, j] = virtual
+            s_j = math.sqrt((1.0 + rest) / (1.0 + rest * damping_weight[j]))
+            work[i, j] = virtual + dt * (s_i * mass[i, j] * s_j / damping_time)
             total += virtual * qd_ref[j]
         work[i, n] += total
-        damping = mass[i, i] / damping_time * (1.0 + rest) / (1.0 + rest * damping_weight[i])
-        work[i, i] += dt * damping
     # Gaussian elimination with partial pivoting of the augmented (n, n + 1) system
     for k in range(n):
         pivot, best = k, abs(work[k, k])

@@ -166,8 +166,9 @@ class LeadThrough:
         self.supervisor.use_model(self.dynamics)  # one model: robot and dynamics agree
         self.friction, self._friction_measured = friction, measured
         self.law.use_friction(friction, measured)
+        dither = None if p.dither is None else p.dither.for_mode(p.mode)
         self.feed_forward = PassiveFeedForward(self.dynamics, friction, self.dt, p.compensation,
-            p.dither, measurement_delay=None, friction_error=self.law.friction_error,
+            dither, measurement_delay=None, friction_error=self.law.friction_error,
             gravity_uncertainty=p.gravity_uncertainty)  # fmt: skip
         # the observer's band states each level's error as the law bounds it: a level
         # nobody measured on this arm is known to ``unmeasured_friction_error`` only
