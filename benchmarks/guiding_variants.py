@@ -127,7 +127,7 @@ def own_rest_uncertainty(robot: lt.RobotDescription, mode: str) -> lt.LeadThroug
 
 
 def strong_dither(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
-    """A dither of 0.6 τ_C on resting joints in active mode (default 0.3)."""
+    """A dither of 0.6 τ_C on resting joints in active mode (the default since it was kept)."""
     return _build(robot, mode, dither={"amplitude": 0.6})
 
 

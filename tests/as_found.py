@@ -167,7 +167,8 @@ def diagonal_damping(monkeypatch) -> None:
     """Active mode as it was before its damping was shaped like the arm (the NumPy law).
 
     ``D̃`` diagonal, ``m_ii / T`` weighed per joint, and the thesis' 0.3 τ_C dither in
-    active mode too: the cases found with them ran further or shook more than they do now.
+    active mode too (the creep park stays per joint): the cases found with them ran further
+    or shook more than they do now.
     """
     monkeypatch.setattr(ActiveLaw, "compiled", False)
     shaped = admittance.virtual_damping

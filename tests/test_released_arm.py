@@ -589,7 +589,8 @@ def test_under_the_ceiling_the_dither_alone_leaves_no_creep_past_the_budget(case
     """The same creeps, parked after 2 s alone, stay within 1 mrad under the dither's ceiling.
 
     What the ceiling prevents: uncalibrated, a level known to 35 % and a gravity error leave
-    less than 0.3 τ_C of friction surely there on the creeping joint (0.6 mrad here).
+    less than the dither's amplitude of friction surely there on the creeping joint (0.6 mrad
+    here).
     """
     result = run_case(case, "active", _uncalibrated(creep=None))
     assert result.stop_time <= 0.5 and result.drift < 1e-3

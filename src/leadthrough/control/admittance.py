@@ -3,7 +3,7 @@
 The virtual system the operator feels is ``M̃(q) q̈_ref + D̃ q̇_ref = τ_in`` with
 ``M̃ = k_M M(q)`` and ``D̃ = S M(q) S / T`` shaped like the arm's inertia too (eq. 6.5,
 written on the reference velocity so that the virtual system is self-contained; ``S``
-diagonal, the identity while every joint is pushed: :func:`virtual_damping`), integrated
+diagonal, near the identity while every joint is pushed: :func:`virtual_damping`), integrated
 with implicit Euler in the damping so that it is stable for any D̃::
 
     (M̃ + dt D̃) q̇_ref⁺ = M̃ q̇_ref + dt τ_in,     q_ref⁺ = q_ref + dt q̇_ref⁺
@@ -295,10 +295,10 @@ def virtual_damping(
     guiding value as its weight falls to 0 (the operator lets go, does not push that
     joint, or holds it back). A released joint then stops within about ``k_M ·
     damping_time / (1 + B)``, and a model error ``e`` that leaks through the weight
-    moves it at ``e w (1 + B w) / ((1 + B) D̃_guide)``, quadratically slower as the weight
-    fades, instead of coasting at ``e / D̃``.
+    moves it at about ``e w (1 + B w) / ((1 + B) D̃_guide)`` (exactly so for a diagonal
+    D̃), quadratically slower as the weight fades, instead of coasting at ``e / D̃``.
 
-    Shaped like M(q), not only its diagonal: while every joint is pushed the arm settles
+    Shaped like M(q), not only its diagonal: while every joint is pushed (S → I) the arm settles
     at ``q̇ = damping_time · M⁻¹ τ``, every motion of the arm on the same time constant
     ``k_M · damping_time``, and a force ``F`` at the tool (``τ = Jᵀ F``) moves the tool at
     ``damping_time · J M⁻¹ Jᵀ F``, the arm's own mobility there. A diagonal ``m_ii /

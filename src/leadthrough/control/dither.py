@@ -1,6 +1,7 @@
 """Dithering against stiction (thesis §5.3, SPEC §5).
 
-A square wave of 15 Hz and 0.3·τ_C is added to the feed-forward of each joint that is
+A square wave of 15 Hz and 0.3·τ_C (passive mode, the thesis'; 0.6·τ_C in active mode)
+is added to the feed-forward of each joint that is
 at rest: too small to move the joint, it keeps the gearbox vibrating, which lowers the
 torque the operator needs to start a motion, and so the torque the momentum observer
 cannot see. It is switched off on a joint as soon as that joint moves, and back on

@@ -70,7 +70,8 @@ class LeadThroughParameters:
             than the arm turns that lag into negative damping that a stiff hand makes
             unstable (see :mod:`leadthrough.experiments.stability`). Inertia costs the
             operator little at teaching speeds; damping is what they feel.
-        damping_time: D̃_ii = m_ii(q) / damping_time while guiding [s]: the force the operator
+        damping_time: D̃ = M(q) / damping_time while guiding (D̃_ii = m_ii(q) / damping_time;
+            :func:`~leadthrough.control.admittance.virtual_damping`) [s]: the force the operator
             needs for a given speed; smaller is heavier.
         rest_damping: Once nobody pushes a joint on (its damping weight → 0) its D̃ rises
             smoothly to (1 + rest_damping) times its guiding value [–]: the released arm
