@@ -247,9 +247,12 @@ def test_toml_false_sets_what_may_be_none(tmp_path):
     """
     path = tmp_path / "lead.toml"
     path.write_text("unwind_time = false\ntool_force = false\n[dither]\npark_time = false\n"
-                    "creep = false\n")  # fmt: skip
+                    "creep = false\namplitude = false\n")  # fmt: skip
     parameters = LeadThroughParameters.from_toml(path)
     assert parameters.dither.park_time is None and parameters.dither.creep is None
+    # an amplitude left to the mode: the thesis' 0.3 τ_C passive, 0.6 τ_C active
+    assert parameters.dither.for_mode("passive").amplitude == 0.3
+    assert parameters.dither.for_mode("active").amplitude == 0.6
     assert parameters.unwind_time is None and parameters.tool_force is None
     path.write_text("inertia_scale = false\n")
     with pytest.raises(lt.ParameterError, match="inertia_scale: expected a number"):
