@@ -166,23 +166,12 @@ def observer_readings(monkeypatch) -> None:
 def diagonal_damping(monkeypatch) -> None:
     """Active mode as it was before its damping was shaped like the arm (the NumPy law).
 
-    ``D̃`` diagonal, ``m_ii / T`` weighed per joint, the thesis' 0.3 τ_C dither in active
-    mode too (the creep park stays per joint) and its wave timed as then (:func:`timed_wave`):
-    the cases found with them ran further or shook more than they do now.
+    ``D̃`` diagonal, ``m_ii / T`` weighed per joint, and the thesis' 0.3 τ_C dither in
+    active mode too (the creep park stays per joint): the cases found with them ran further
+    or shook more than they do now.
     """
     monkeypatch.setattr(ActiveLaw, "compiled", False)
     shaped = admittance.virtual_damping
     monkeypatch.setattr(active_law, "virtual_damping",
                         lambda mass, *args: np.diag(np.diag(shaped(mass, *args))))  # fmt: skip
     monkeypatch.setattr(dither, "ACTIVE_AMPLITUDE", 0.3)
-    timed_wave(monkeypatch)
-
-
-def timed_wave(monkeypatch) -> None:
-    """The dither's wave timed at exactly its frequency, as before its half-period was whole.
-
-    At 250 Hz a 15 Hz half-period then ran 8 or 9 samples, and the wave's pattern repeated
-    only every 0.2 s (``dither.wave_frequency``): the cases found with it stuck, slipped
-    and crept on that wave, and a stick-slip jump is sensitive to the dither's phase.
-    """
-    monkeypatch.setattr(dither, "wave_frequency", lambda frequency, dt: frequency)

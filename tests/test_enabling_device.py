@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from as_found import timed_wave
 from leadthrough.control.active_law import _REST_DAMPING, ActiveLaw
 from leadthrough.control.admittance import AdmittanceState
 from leadthrough.experiments.guiding import Case, run_case
@@ -176,12 +175,7 @@ def test_held_it_guides_lighter(released_with_the_device):
 
 
 def test_held_the_rising_damping_costs_effort(monkeypatch):
-    """As found: the damping that rises where no push sustains a joint, kept while held.
-
-    With the dither's wave timed as when it was found (:func:`as_found.timed_wave`); with
-    its half-period whole, the rising damping costs this case 3 % (3.55 N against 3.45).
-    """
-    timed_wave(monkeypatch)
+    """As found: the damping that rises where no push sustains a joint, kept while held."""
     case = Case("dry", 3, "relaxed", "sideways", PlantRanges(enabling_device=True))
     flat = run_case(case, "active").rms_force
     use = ActiveLaw.use_enabling

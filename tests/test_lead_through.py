@@ -7,7 +7,7 @@ import pytest
 from scipy.ndimage import uniform_filter1d
 
 import leadthrough as lt
-from leadthrough.control.dither import DitherParameters, wave_frequency
+from leadthrough.control.dither import DitherParameters
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.control.parameters import LeadThroughParameters
 from leadthrough.experiments.lead_through import (
@@ -104,8 +104,7 @@ def test_sixty_second_session_is_stable(yumi, friction):
     starts = [a.start for a in actions[1:]] + [sim.t[-1]]
     # motion, not the dither's 15 Hz vibration: speeds averaged over one dither period
     # (a square-wave edge kicks a resting wrist joint to 0.01 rad/s for one sample)
-    dt = float(sim.t[1] - sim.t[0])
-    period = round(1.0 / (wave_frequency(LeadThroughParameters().dither.frequency, dt) * dt))
+    period = round(1.0 / (LeadThroughParameters().dither.frequency * float(sim.t[1] - sim.t[0])))
     speed = uniform_filter1d(sim.qd_true, period, axis=0)
     for action, next_start in zip(actions, starts, strict=True):
         after = (sim.t >= action.stop) & (sim.t < next_start)

@@ -230,9 +230,8 @@ def test_on_a_calibrated_arm_following_the_push_shakes_less_than_the_thesis_law(
     push 0.96× (one of 742 of the 2013 paired calibrated cases of docs/guiding_results.md
     that shake less by more than 0.05; 151 shake more). With the calibration reading the
     observer and its gravity error kept constant, as when it was measured (read from the
-    momentum balance, both laws shake about as passive mode). And with the diagonal damping,
-    the thesis' dither in active mode and its wave timed, of the time (with the wave's
-    half-period whole, the default shakes 1.10× passive).
+    momentum balance, both laws shake about as passive mode). And with the diagonal damping
+    and the thesis' dither in active mode of the time.
     """
     observer_readings(monkeypatch)
     constant_gravity_bias(monkeypatch)

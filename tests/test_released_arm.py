@@ -30,7 +30,6 @@ from as_found import (
     six_hertz_calibration,
     slow_calibration_motion,
     thesis_compensation,
-    timed_wave,
     two_second_park,
     uncapped_dither,
     unread_torque_offset,
@@ -424,10 +423,8 @@ def test_a_joint_running_ahead_of_its_references_is_braked_not_followed(cls, run
     jumps (counted again for this test; see the next one) through the observer, as then,
     and the references are not unwound, each joint's Coulomb band is its own, the
     compensation the thesis' and the resting reference drawn after a joint that moves (as
-    when the case was found; today's reference stays, which also stops it), and the
-    dither's wave timed as then (with its half-period whole, the re-anchored run stops too).
+    when the case was found; today's reference stays, which also stops it).
     """
-    timed_wave(monkeypatch)
     monkeypatch.setattr(calibration, "_JUMPING", np.inf)
     _calibration_of_the_time(monkeypatch)
     observer_readings(monkeypatch)
@@ -470,10 +467,8 @@ def test_a_joint_the_calibration_read_only_a_few_times_keeps_its_level(few_read,
     out +20 % and 0.16 Nm off, and the passive feed-forward ran the released arm on; with
     the model's level and its gravity counted as not known, the arm stops. With the
     calibration motion and the observer's readings of the time (the default motion slides
-    that wrist long enough; the momentum balance reads it within 5 % even from few samples),
-    and the dither's wave timed as then (with its half-period whole, both arms stop).
+    that wrist long enough; the momentum balance reads it within 5 % even from few samples).
     """
-    timed_wave(monkeypatch)
     slow_calibration_motion(monkeypatch)
     unread_torque_offset(monkeypatch)
     observer_readings(monkeypatch)

@@ -19,7 +19,6 @@ from as_found import (
     observer_readings,
     own_rest_bands,
     slow_calibration_motion,
-    timed_wave,
     two_second_park,
     unread_torque_offset,
 )
@@ -56,10 +55,8 @@ def test_a_joint_held_by_stiction_does_not_wind_the_admittance_up(monkeypatch):
     against 1.47×. And with the dither parked after 2 s, as then (parked after 0.5 s it
     stops twitching both arms in the hold, whose 2 s count in the vibration), and no
     offset of the torque measurement read by the calibration, and the calibration reading
-    the observer, and the dither's wave timed, as then (with its half-period whole, 1.28×
-    against 1.29×: on this case the unwinding's gain came with that wave's phase).
+    the observer, as then.
     """
-    timed_wave(monkeypatch)
     slow_calibration_motion(monkeypatch)
     observer_readings(monkeypatch)
     unread_torque_offset(monkeypatch)

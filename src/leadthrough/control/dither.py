@@ -43,10 +43,7 @@ class DitherParameters:
     """Dither settings (defaults: thesis §5.3).
 
     Attributes:
-        frequency: Square-wave frequency [Hz] (15: below the resonances of Fig. 5.3). The
-            wave runs at the nearest frequency whose half-period is a whole number of
-            control periods (:func:`wave_frequency`: 15.6 Hz at 250 Hz and 125 Hz, 15.2 Hz
-            at 1 kHz).
+        frequency: Square-wave frequency [Hz] (15: below the resonances of Fig. 5.3).
         amplitude: Amplitude as a fraction of each joint's Coulomb level [–]; None: the
             mode's (:meth:`for_mode`), the thesis' 0.3 in passive mode and on its own,
             :data:`ACTIVE_AMPLITUDE` in active mode.
@@ -117,23 +114,6 @@ class DitherParameters:
         return cls(park_time=None, creep=None, **changes)
 
 
-def half_period_samples(frequency: float, dt: float) -> int:
-    """Control periods in each half of the dither's wave: the nearest whole number (≥ 1).
-
-    A square wave whose half-period is not a whole number of samples jitters between
-    ⌊·⌋ and ⌈·⌉ samples, and the pattern that repeats is slower than the wave: 15 Hz at
-    250 Hz repeats every 0.2 s, and carries a 5 Hz component of 7 % of its fundamental
-    (at 125 Hz 10 Hz and 5 Hz, 12 %), inside the band the tool's vibration is judged in and
-    where a torque moves the arm 9× as far as at 15 Hz.
-    """
-    return max(1, round(1.0 / (2.0 * frequency * dt)))
-
-
-def wave_frequency(frequency: float, dt: float) -> float:
-    """The frequency the dither's wave runs at, asked for ``frequency`` at period ``dt`` [Hz]."""
-    return 1.0 / (2.0 * half_period_samples(frequency, dt) * dt)
-
-
 class Dither:
     """Square-wave dither on the joints at rest.
 
@@ -155,9 +135,6 @@ class Dither:
         self.amplitude = float(self.parameters.amplitude or 0.0)
         self.friction = friction
         self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
-        #: The wave's frequency at this period [Hz] (:func:`wave_frequency`).
-        self.frequency = wave_frequency(self.parameters.frequency, self.dt)
-        self._half_period = 0.5 / self.frequency  # [s], a whole number of periods
         self.reset()
 
     def reset(self) -> None:
@@ -207,7 +184,8 @@ class Dither:
             self._start = float(t)
         now = self._now = float(t) - self._start  # small numbers: a Unix clock loses nothing
         # a sample on an edge (within 1e-4 half-period: clock rounding) starts the new half
-        return now, (1.0 if math.floor(now / self._half_period + 1e-4) % 2 == 0 else -1.0)
+        frequency = self.parameters.frequency
+        return now, (1.0 if math.floor(2.0 * frequency * now + 1e-4) % 2 == 0 else -1.0)
 
     @property
     def rest_since(self) -> FloatArray:
@@ -220,7 +198,7 @@ class Dither:
     @property
     def slow_pole(self) -> float:
         """Pole of the low-pass whose time constant is one dither period [–]."""
-        return math.exp(-self.dt * self.frequency)
+        return math.exp(-self.dt * self.parameters.frequency)
 
     @property
     def slow_velocity(self) -> FloatArray:

@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from leadthrough.control.dither import DitherParameters, wave_frequency
+from leadthrough.control.dither import DitherParameters
 from leadthrough.control.feedforward import PassiveFeedForward
 from leadthrough.estimation.classical import ClassicalMomentumObserver
 from leadthrough.estimation.observer import MomentumObserver
@@ -273,14 +273,8 @@ def dither_frequency_sweep(
     config: TwinConfig = REALISTIC_TWIN,
     duration: float = 2.0,
 ) -> DitherSweep:
-    """Dither all joints of the arm at rest at each frequency; measure noise and vibration.
-
-    The sweep's frequencies are the waves' (:func:`~leadthrough.control.dither.wave_frequency`
-    at the twin's control period: a half-period of whole periods), not the ones asked for,
-    each once, in increasing order.
-    """
+    """Dither all joints of the arm at rest at each frequency; measure noise and vibration."""
     frequencies = np.arange(1.0, 21.0, 1.0) if frequencies is None else np.asarray(frequencies)
-    frequencies = np.unique([wave_frequency(float(f), config.control_dt) for f in frequencies])
     noise, vibration, drift = [], [], []
     for frequency in frequencies:
         run = _run(robot, friction, Operator(), duration, 0, config,
