@@ -175,12 +175,16 @@ def _velocities(rng: np.random.Generator, k: int, n: int) -> np.ndarray:
 
 
 def _feed_forward_run(parameters: DitherParameters | None, clock: bool, compiled: bool,
-                      delay: int | None, capped: bool,
-                      pushed: bool = False) -> np.ndarray:  # fmt: skip
+                      delay: int | None, capped: bool, pushed: bool = False,
+                      limit_zone: float | None = None,
+                      anywhere: bool = False) -> np.ndarray:  # fmt: skip
     """Parts, total and dither state over 10 000 seeded periods (NaN speeds too).
 
     ``capped``: a compensation ceiling, with gravity references of every size (or none).
     ``pushed``: an operator's push in [−1, 1] in two periods of three (none in the third).
+    ``limit_zone``: the compensation fades within zones of this width before the limits.
+    ``anywhere``: every other pose puts the joints anywhere between their limits, and a
+    reading turns NaN 10 periods before the end.
     The pose changes with each phase of :func:`_velocities`; in half the phases every
     joint creeps, at up to 0.3 mrad/s (the dither's creep limit crossed or not).
     """
@@ -188,17 +192,23 @@ def _feed_forward_run(parameters: DitherParameters | None, clock: bool, compiled
     rng = np.random.default_rng(21)
     feed_forward = PassiveFeedForward(lt.Dynamics(robot), _cable(robot), 0.004,
         dither=parameters, measurement_delay=delay, friction_error=np.linspace(0.1, 0.3, 7),
-        gravity_uncertainty=0.15 if capped else None)  # fmt: skip
+        gravity_uncertainty=0.15 if capped else None,
+        limit_zone=limit_zone)  # fmt: skip
     feed_forward.compiled = compiled
     dither, rows = feed_forward.dither, []
     for k in range(10000):
         if k % 700 == 0:
             pose = robot.home() + rng.normal(0.0, 0.5, 7)
+            spread = rng.uniform(robot.q_min, robot.q_max)
+            if anywhere and k % 1400:
+                pose = spread
             creep = rng.choice([0.0, 3e-4]) * rng.random(7)  # [rad/s]
         q = pose + creep * 0.004 * (k % 700) + rng.normal(0.0, 1e-5, 7)
         qd = _velocities(rng, k, 7) * (1.0, 0.3)[k % 2]  # through the dead-band and the ramp
         if k % 997 == 5:
             qd[k % 7] = np.nan  # a NaN speed: moving, as in NumPy
+        if anywhere and k == 9990:  # a NaN reading: NaN from there on (its gravity too)
+            q[3] = np.nan
         reference = None if k % 3 == 0 else rng.normal(0.0, (1.0, 5.0)[k % 2], 7)
         if k % 1009 == 7 and reference is not None:
             reference[k % 7] = np.nan
@@ -213,21 +223,28 @@ def _feed_forward_run(parameters: DitherParameters | None, clock: bool, compiled
 
 
 @pytest.mark.parametrize(
-    "park_time, creep, clock, dithered, delay, capped, pushed",
+    "park_time, creep, clock, dithered, delay, capped, pushed, zoned",
     [
-        (2.0, 2e-4, True, True, None, False, False),
-        (None, 2e-4, True, True, 2, False, True),
-        (0.5, None, False, True, 1, True, True),
-        (None, None, True, True, None, False, False),
-        (2.0, 2e-4, True, False, 2, True, False),
+        (2.0, 2e-4, True, True, None, False, False, False),
+        (None, 2e-4, True, True, 2, False, True, True),
+        (0.5, None, False, True, 1, True, True, False),
+        (None, None, True, True, None, False, False, False),
+        (2.0, 2e-4, True, False, 2, True, False, True),
     ],
 )
 def test_compiled_feed_forward_equals_the_numpy_reference(park_time, creep, clock, dithered,
-                                                          delay, capped, pushed):  # fmt: skip
-    """10 000 periods (rest, park, creep, starts and stops, a push or none): same torques."""
+                                                          delay, capped, pushed,
+                                                          zoned):  # fmt: skip
+    """10 000 periods (rest, park, creep, starts, stops, a push or none, limits): same torques."""
     parameters = DitherParameters(park_time=park_time, creep=creep) if dithered else None
-    compiled = _feed_forward_run(parameters, clock, True, delay, capped, pushed)
-    reference = _feed_forward_run(parameters, clock, False, delay, capped, pushed)
+    zone = 0.3 if zoned else None
+    compiled = _feed_forward_run(parameters, clock, True, delay, capped, pushed, zone, zoned)
+    reference = _feed_forward_run(parameters, clock, False, delay, capped, pushed, zone, zoned)
+    if zoned:  # the zones take some compensation away, not all
+        whole = _feed_forward_run(parameters, clock, False, delay, capped, pushed, None, True)
+        moving = np.abs(whole[:, :7]) > 1e-9
+        lower = np.abs(reference[:, :7]) < np.abs(whole[:, :7]) - 1e-9
+        assert 0.02 < np.mean(lower[moving]) < 0.5
     if capped:  # the ceiling binds in some periods, not in all
         free = _feed_forward_run(parameters, clock, False, delay, False)
         moving = np.abs(free[:, :7]) > 1e-9

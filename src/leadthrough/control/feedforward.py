@@ -15,6 +15,7 @@ from leadthrough.errors import ParameterError
 from leadthrough.friction.compensation import (
     CoulombCompensation,
     CoulombCompensationParameters,
+    LimitZone,
     compensation_ceiling,
 )
 from leadthrough.friction.model import FrictionModel
@@ -143,6 +144,10 @@ class PassiveFeedForward:
             joint still stops, and the dither within ± the same ceiling
             (:func:`dither_within`), so that alone it moves no joint. None: no ceiling (the
             thesis' law).
+        limit_zone: Width of the zone before each joint limit [rad] in which the Coulomb
+            compensation no longer pushes the joint towards the limit (whole two widths
+            from it, none within one: :class:`~leadthrough.friction.compensation.LimitZone`).
+            None: it pushes up to the limit (the thesis' law).
     """
 
     #: Run :meth:`step` compiled (:func:`_feed_forward_step`); False runs the NumPy reference.
@@ -158,6 +163,7 @@ class PassiveFeedForward:
         measurement_delay: int | None = 2,
         friction_error: ArrayLike | None = None,
         gravity_uncertainty: float | None = None,
+        limit_zone: float | None = None,
     ) -> None:
         self.dynamics = dynamics
         self.friction = friction or FrictionModel.from_robot(dynamics.robot)
@@ -165,7 +171,9 @@ class PassiveFeedForward:
         self.friction_error = np.broadcast_to(np.asarray(relative, dtype=float),
                                               (dynamics.n,)).copy()  # fmt: skip
         self.gravity_uncertainty = gravity_uncertainty
-        self.compensation = CoulombCompensation(self.friction, compensation, dt)
+        robot = dynamics.robot
+        limits = None if limit_zone is None else LimitZone(robot.q_min, robot.q_max, limit_zone)
+        self.compensation = CoulombCompensation(self.friction, compensation, dt, limits)
         self.dither = None if dither is None else Dither(self.friction, dt, dither)
         n = dynamics.n
         self._sent = None if measurement_delay is None else DelayLine((n,), measurement_delay)
@@ -179,7 +187,9 @@ class PassiveFeedForward:
             math.nan if gravity_uncertainty is None else gravity_uncertainty,
             self.dither.slow_pole if self.dither else 0.0,
             math.inf if not dither_settings or dither_settings.creep is None
-            else dither_settings.creep])  # fmt: skip
+            else dither_settings.creep, math.nan if limits is None else limits.width])  # fmt: skip
+        self._low = robot.q_min.astype(float)  # the limits, for the compiled step
+        self._high = robot.q_max.astype(float)
         self._no_rest = np.full(n, np.nan)  # the dither's state when there is no dither
         self._no_slow = np.zeros(n)
         self._no_position = np.full(n, np.nan)
@@ -230,7 +240,8 @@ class PassiveFeedForward:
             return self._numpy_step(q, velocity, gravity, now, wave, reference, push)
         parts = np.empty((3, gravity.shape[0]))  # friction, dither, total
         pushed = self._no_push if push is None else push
-        compensation, errors = self.compensation, (self.friction_error, reference, pushed)
+        compensation = self.compensation
+        errors = (self.friction_error, reference, pushed, self._low, self._high)
         level = compensation.friction.coulomb_level(q)
         if dither is None:
             _feed_forward_step(q, velocity, level, gravity, *errors, self._no_rest,
@@ -297,13 +308,13 @@ def dither_within(dither: FloatArray, ceiling: FloatArray) -> FloatArray:
 #: Scalars of :func:`_feed_forward_step`, in order (``park_time`` inf: never parks).
 FEED_FORWARD_SCALARS = ("moving_velocity", "rest_time", "park_time", "dt", "dead_band",
                         "fraction", "full_velocity", "pole", "gravity_uncertainty",
-                        "slow_pole", "creep")  # fmt: skip
+                        "slow_pole", "creep", "limit_zone")  # fmt: skip
 
 
 @kernel
-def _feed_forward_step(q, qd, level, gravity, friction_error, reference, push, rest_since,
-                       slow, position, anchor, active, filtered, parts, dithering, now,
-                       quiet_since, amplitude, scalars):  # fmt: skip
+def _feed_forward_step(q, qd, level, gravity, friction_error, reference, push, low, high,
+                       rest_since, slow, position, anchor, active, filtered, parts,
+                       dithering, now, quiet_since, amplitude, scalars):  # fmt: skip
     """One period of :class:`PassiveFeedForward`, in place; returns the new ``quiet_since``.
 
     The same decisions and arithmetic, in the same order, as the NumPy reference
@@ -323,7 +334,9 @@ def _feed_forward_step(q, qd, level, gravity, friction_error, reference, push, r
     ``max(q̇₁, 2 q̇₀)``, the level ``ε τ_C`` capped by
     :func:`~leadthrough.friction.compensation.compensation_ceiling` (its ``max(·, 0)`` as
     written there; ``gravity_uncertainty`` NaN: no cap), below the ramp the ``push``
-    (zeros: the thesis' law), then the low-pass filter.
+    (zeros: the thesis' law), its share left towards a limit in [``low``, ``high``]
+    (:meth:`~leadthrough.friction.compensation.LimitZone.share`; ``limit_zone`` NaN: whole),
+    then the low-pass filter.
     ``parts`` gets the rows
     friction, dither and gravity + friction + dither [Nm]. Without ``dithering`` the
     dither state is not touched and the dead-band is q̇₀ on every joint.
@@ -331,7 +344,9 @@ def _feed_forward_step(q, qd, level, gravity, friction_error, reference, push, r
     moving_velocity, rest_time, park_time, dt = scalars[0], scalars[1], scalars[2], scalars[3]
     dead_band, fraction, full_velocity, pole = scalars[4], scalars[5], scalars[6], scalars[7]
     gravity_uncertainty, slow_pole, creep = scalars[8], scalars[9], scalars[10]
+    limit_zone = scalars[11]
     capped = gravity_uncertainty == gravity_uncertainty  # not NaN
+    zoned = limit_zone == limit_zone
     n = qd.shape[0]
     if dithering:
         every_joint_rests = True
@@ -389,6 +404,12 @@ def _feed_forward_step(q, qd, level, gravity, friction_error, reference, push, r
         ramp = ramp if ramp < 1.0 or ramp != ramp else 1.0
         sign = 1.0 if qd[i] > 0.0 else (-1.0 if qd[i] < 0.0 else qd[i])  # np.sign (NaN, ±0)
         raw = (ramp * sign + (1.0 - ramp) * push[i]) * compensated
+        if zoned:  # LimitZone.share (np.clip keeps a NaN)
+            room = q[i] - low[i] if raw < 0.0 else high[i] - q[i]
+            share = room / limit_zone - 1.0
+            share = share if share < 1.0 or share != share else 1.0
+            share = share if share > 0.0 or share != share else 0.0
+            raw = raw * share
         filtered[i] = pole * filtered[i] + (1.0 - pole) * raw
         parts[0, i], parts[1, i] = filtered[i], dither
         parts[2, i] = gravity[i] + filtered[i] + dither

@@ -169,7 +169,8 @@ class LeadThrough:
         dither = None if p.dither is None else p.dither.for_mode(p.mode)
         self.feed_forward = PassiveFeedForward(self.dynamics, friction, self.dt, p.compensation,
             dither, measurement_delay=None, friction_error=self.law.friction_error,
-            gravity_uncertainty=p.gravity_uncertainty)  # fmt: skip
+            gravity_uncertainty=p.gravity_uncertainty,
+            limit_zone=p.limit_zone if p.limit_aware else None)  # fmt: skip
         # the observer's band states each level's error as the law bounds it: a level
         # nobody measured on this arm is known to ``unmeasured_friction_error`` only
         known = dataclasses.replace(friction, relative_error=self.law.friction_error)

@@ -147,9 +147,11 @@ class LeadThroughParameters:
             (:func:`~leadthrough.control.admittance.reanchored`).
         limit_zone: Near a joint limit (within this of the hard limit) the references
             stay out and a push *away* from the limit is not taken for the operator's
-            (it is the end-stop's reaction) [rad].
-        limit_aware: Whether the admittance respects ``limit_zone`` (False reproduces the
-            failure of thesis §6.3.2).
+            (it is the end-stop's reaction) [rad]; in both modes the Coulomb compensation
+            fades from two zone widths to one before a limit it pushes a joint towards
+            (:class:`~leadthrough.friction.compensation.LimitZone`).
+        limit_aware: Whether the controller respects ``limit_zone`` (False reproduces the
+            failure of thesis §6.3.2, and compensates up to the limits).
         assist_speed_fraction: The admittance never asks a joint for more than this
             fraction of its speed limit [–] (teaching is slow; the tool speed limit of the
             supervisor stays the last word).

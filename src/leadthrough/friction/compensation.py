@@ -25,6 +25,15 @@ the law misreads most where the model's error was never measured: by default
 push only once a start-up calibration has been accepted, and keeps the thesis' law
 otherwise.
 
+Near a joint limit the compensation must not carry the joint on: a joint the hand pushes
+with little more than the friction the compensation leaves (a wrist whose axis passes
+near the hand's grip, where turning does not take the push away) slides as far as its
+limit, and the admittance, whose references stop ``limit_zone`` short of it, then brakes
+it at full speed, in stick-slip against a compensation that flips with every bounce.
+Moving towards the nearer limit, the compensation fades from whole at two zone widths
+from it to none at one (:class:`LimitZone`): there the joint's own friction stops it,
+where the references stop.
+
 ε < 1 keeps the released arm stopping only if nothing else pushes it. A gravity model
 that is off by ΔG pushes too, so the compensated level may also be capped per joint by
 a **ceiling** [Nm] (:func:`compensation_ceiling`): the friction that is surely there,
@@ -114,6 +123,37 @@ def coulomb_compensation(
     return (ramp * np.sign(qd) + (1.0 - ramp) * np.asarray(push, dtype=float)) * level
 
 
+@dataclass(frozen=True, eq=False)
+class LimitZone:
+    """Where the compensation fades before the joint limits.
+
+    Attributes:
+        low: Lower joint limits [rad], (n,) (−inf: none).
+        high: Upper joint limits [rad], (n,) (inf: none).
+        width: The zone's width [rad] (``LeadThroughParameters.limit_zone``), > 0: the
+            compensation towards a limit is whole ``2 · width`` from it and none within
+            ``width`` of it.
+    """
+
+    low: FloatArray
+    high: FloatArray
+    width: float
+
+    def __post_init__(self) -> None:
+        if real("width", self.width, error=ParameterError) <= 0.0:
+            raise ParameterError("width", f"must be > 0, got {self.width:g}")
+
+    def share(self, q: ArrayLike, torque: ArrayLike) -> FloatArray:
+        """What is left of a compensation ``torque`` [Nm] at ``q`` [rad], per joint [–].
+
+        ``clip(d / width − 1, 0, 1)``, with d the room [rad] between the joint and the
+        limit the torque pushes it towards (a NaN reading gives NaN).
+        """
+        q, torque = np.asarray(q, dtype=float), np.asarray(torque, dtype=float)
+        room = np.where(torque < 0.0, q - self.low, self.high - q)
+        return np.clip(room / self.width - 1.0, 0.0, 1.0)
+
+
 def compensation_ceiling(
     coulomb: ArrayLike, friction_error: ArrayLike, gravity_error: ArrayLike
 ) -> FloatArray:
@@ -139,6 +179,8 @@ class CoulombCompensation:
         friction: Friction model whose τ_C(q) is compensated.
         parameters: ε, q̇₀, q̇₁.
         dt: Control period [s].
+        limits: Where the compensation fades before the joint limits; None: nowhere
+            (the thesis' law).
     """
 
     def __init__(
@@ -146,9 +188,11 @@ class CoulombCompensation:
         friction: FrictionModel,
         parameters: CoulombCompensationParameters | None = None,
         dt: float = 0.004,
+        limits: LimitZone | None = None,
     ) -> None:
         self.friction = friction
         self.parameters = parameters or CoulombCompensationParameters()
+        self.limits = limits
         self._pole = pole(dt)
         self._torque = np.zeros(friction.n_joints)
 
@@ -199,5 +243,7 @@ class CoulombCompensation:
             full = np.maximum(p.full_velocity, 2.0 * band)
         level = self.friction.coulomb_level(q)
         raw = coulomb_compensation(qd, level, p.fraction, band, full, ceiling, push)
+        if self.limits is not None and q is not None:
+            raw = raw * self.limits.share(q, raw)
         self._torque = low_pass(self._torque, raw, self._pole)
         return self._torque.copy()
