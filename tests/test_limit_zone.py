@@ -74,8 +74,9 @@ def test_a_wrist_the_hand_turns_stops_where_its_references_do(monkeypatch):
     to 0.09 rad from it, where the tracking braked it in stick-slip (the worst vibration
     of that case, design log). With the fade its own friction stops it at the zone.
     """
-    zone = lt.LeadThroughParameters().limit_zone
-    assert _closest_approach(guiding.default_factory) > 0.75 * zone
+    # the fade stops it in the zone's outer quarter; compensated up to the limit it runs past
+    outer_quarter = 0.75 * lt.LeadThroughParameters().limit_zone
+    assert _closest_approach(guiding.default_factory) > outer_quarter
 
     zoned = lead_through.PassiveFeedForward
 
@@ -83,4 +84,4 @@ def test_a_wrist_the_hand_turns_stops_where_its_references_do(monkeypatch):
         return zoned(*args, **{**kwargs, "limit_zone": None})
 
     monkeypatch.setattr(lead_through, "PassiveFeedForward", unzoned)
-    assert _closest_approach(guiding.default_factory) < 0.5 * zone
+    assert _closest_approach(guiding.default_factory) < outer_quarter

@@ -171,8 +171,10 @@ class PassiveFeedForward:
         self.friction_error = np.broadcast_to(np.asarray(relative, dtype=float),
                                               (dynamics.n,)).copy()  # fmt: skip
         self.gravity_uncertainty = gravity_uncertainty
+        # the joint limits, for the compiled step and the NumPy one
         robot = dynamics.robot
-        limits = None if limit_zone is None else LimitZone(robot.q_min, robot.q_max, limit_zone)
+        self._low, self._high = robot.q_min.astype(float), robot.q_max.astype(float)
+        limits = None if limit_zone is None else LimitZone(self._low, self._high, limit_zone)
         self.compensation = CoulombCompensation(self.friction, compensation, dt, limits)
         self.dither = None if dither is None else Dither(self.friction, dt, dither)
         n = dynamics.n
@@ -188,8 +190,6 @@ class PassiveFeedForward:
             self.dither.slow_pole if self.dither else 0.0,
             math.inf if not dither_settings or dither_settings.creep is None
             else dither_settings.creep, math.nan if limits is None else limits.width])  # fmt: skip
-        self._low = robot.q_min.astype(float)  # the limits, for the compiled step
-        self._high = robot.q_max.astype(float)
         self._no_rest = np.full(n, np.nan)  # the dither's state when there is no dither
         self._no_slow = np.zeros(n)
         self._no_position = np.full(n, np.nan)

@@ -225,7 +225,8 @@ class CoulombCompensation:
 
         Args:
             qd: Joint velocities [rad/s].
-            q: Joint positions [rad], for a position-dependent Coulomb level.
+            q: Joint positions [rad], for a position-dependent Coulomb level and the
+                fade before the limits (:attr:`limits`; none without ``q``).
             dead_band: Per-joint q̇₀ overriding the parameter (widened while dithering);
                 the ramp then ends at ``max(q̇₁, 2 q̇₀)``.
             ceiling: Per-joint cap on the compensated level [Nm]
