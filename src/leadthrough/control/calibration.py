@@ -615,6 +615,8 @@ class CalibrationRun:
         # the joint that ran faster than max_speed or too far off the motion, if one
         self.runaway: int | None = None
         self._balance = MomentumBalance(dynamics, friction)  # what the readings come from
+        #: the largest external torque the model's errors may read untouched [Nm]
+        self.push_bound = self._plausible_push(gravity_uncertainty)
         self._discrepancy = np.zeros_like(self.pose)  # Σ (τ_measured − τ_commanded) [Nm]
         self._discrepancies = 0
 
@@ -692,6 +694,38 @@ class CalibrationRun:
             self.disturbance = (f"joint {joint + 1} was {1e3 * error[joint]:.0f} mrad off the "
                                 "calibration motion: was the arm touched? Its friction not "
                                 "trusted")  # fmt: skip
+
+    def _plausible_push(self, gravity_uncertainty: float) -> FloatArray:
+        """What the observer may read at the pose with nobody touching the arm [Nm].
+
+        The model errors this calibration would still accept, each at its bound: a torque
+        offset of ``max_torque_offset`` of the torque limit, a gravity error of
+        ``gravity_uncertainty`` of G(q₀) plus a payload of :meth:`~CalibrationParameters.
+        payload_limit` at the flange, and friction (1 + ``max_friction_change``) times the
+        Coulomb level (a level that far off the model's while a joint slides, or the
+        stiction that holds a joint between strokes).
+        """
+        p, q = self.parameters, self.pose
+        payload = p.payload_limit(self.dynamics.robot) * np.abs(self.payload_regressor(q))
+        return (p.max_torque_offset * self.dynamics.robot.torque_limits
+                + gravity_uncertainty * np.abs(self.dynamics.gravity(q)) + payload
+                + (1.0 + p.max_friction_change) * self.friction.coulomb_level(q))  # fmt: skip
+
+    def check_push(self, estimate: FloatArray) -> None:
+        """Stop the run at once if the observer reads a push no model error explains.
+
+        ``estimate``: the observer's external torque this period [Nm]. Above
+        :attr:`push_bound` on any joint, someone (or something) pushes the arm: the tracking
+        would hold it against them until the run ends (a stiff hand that grabbed at once
+        pulled 60 N by then, and the arm jumped after it at 1.5 rad/s when let go), so the
+        run is refused now and the arm let go.
+        """
+        over = np.abs(estimate) - self.push_bound
+        if self.disturbance is None and np.max(over) > 0.0:
+            joint = int(np.argmax(over))
+            self.interrupt(f"joint {joint + 1} was pushed with {estimate[joint]:+.2f} Nm, more "
+                           f"than the {self.push_bound[joint]:.2f} Nm its model may be off: "
+                           "was the arm touched? Its friction not measured")  # fmt: skip
 
     def interrupt(self, reason: str) -> None:
         """Stop the run for ``reason`` (the first disturbance is the one kept).

@@ -503,7 +503,8 @@ class LeadThrough:
         discrepancy = None
         if tau_measured is not None and told:
             discrepancy = tau_measured - self._sent.measured[0]
-        self.observer.update(q, qd, applied, model)  # warm for guiding; the run reads itself
+        # warm for guiding, and what tells a hand on the arm (the run reads itself)
+        run.check_push(self.observer.update(q, qd, applied, model))
         if self._enabling and elapsed < run.duration:  # a hand on the arm while it runs
             run.interrupt(HELD_WHILE_CALIBRATING)
         run.record(elapsed, q, applied, discrepancy)
