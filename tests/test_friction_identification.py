@@ -105,9 +105,14 @@ def test_triangular_velocity_profile():
 
 
 def test_mapping_logs_and_log_files_identify_the_same(short_logs, yumi, tmp_path):
-    """Logs as mappings, and saved to CSV and NPZ then loaded, give the same model."""
+    """Logs as mappings, and saved to CSV and NPZ then loaded, give the same model.
+
+    So does a robot description given in place of its dynamics.
+    """
     dynamics = lt.Dynamics(yumi)
     model, _ = identify_friction(short_logs, dynamics, joints=[6])
+    from_robot, _ = identify_friction(short_logs, yumi, joints=[6])  # its model built there
+    assert from_robot.coulomb[6] == model.coulomb[6]
     as_dicts = [{"t": log.t, "q": log.q, "qd": log.qd, "tau": log.tau} for log in short_logs]
     from_dicts, _ = identify_friction(as_dicts, dynamics, joints=[6])
     assert from_dicts.coulomb[6] == model.coulomb[6]

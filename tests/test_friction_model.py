@@ -416,3 +416,19 @@ def test_constructor_rejects_negative_coulomb_level_in_range():
     with pytest.raises(ParameterError) as info:
         FrictionModel(**values)
     assert info.value.parameter.startswith("position_linear")
+
+
+def test_a_velocity_that_is_not_one_per_joint_is_refused(model):
+    """q̇ or q of another joint count is refused, naming the shape.
+
+    It failed deep inside NumPy's broadcasting, or broadcast silently. A scalar, a (k, n)
+    batch and a (k, 1) column (every joint at each velocity) stay valid.
+    """
+    n = model.n_joints
+    with pytest.raises(lt.InputShapeError, match=r"qd .*expected shape \(7,\), got \(8,\)"):
+        model.mean(np.zeros(n + 1))
+    with pytest.raises(lt.InputShapeError, match=r"q .*got \(3,\)"):
+        model.std(np.zeros(n), np.zeros(3))
+    assert model.mean(0.1).shape == (n,)
+    assert model.mean(np.zeros((5, n))).shape == (5, n)
+    assert model.mean(np.zeros((5, 1))).shape == (5, n)

@@ -160,3 +160,22 @@ def test_a_joint_without_rows_is_reported_as_nominal():
     first, second = str(report).splitlines()[1:]
     assert "0.100" in first
     assert "1.000" not in second and "–" in second and "nominal" in second
+
+
+def test_a_gains_std_counts_the_scale_the_data_cannot_see():
+    """``τ = Y π / g`` fits (s π, s g) as well for any s: only the priors hold that scale.
+
+    With exact data every other direction is known, so g's std is the scale's, from the
+    priors alone: ``g / √(Σ (π_i / σ_i)² + (g / σ_g)²)`` (an independent computation).
+    Fitting g with π held gave 1e-6 here.
+    """
+    from leadthrough.identification.dynamics import _gain_std
+
+    rng = np.random.default_rng(3)
+    rows = rng.normal(size=(400, 4))
+    pi, prior_std, gain, gain_prior = np.array([2.0, -1.0, 0.5, 1.5]), np.full(4, 0.5), 1.0, 0.15
+    measured = rows @ pi / gain
+    std = _gain_std(rows, measured, np.full(400, 1e-6), np.zeros(400, dtype=int), pi,
+                    np.array([gain]), (prior_std, gain_prior))  # fmt: skip
+    scale = gain / np.sqrt(np.sum((pi / prior_std) ** 2) + (gain / gain_prior) ** 2)
+    np.testing.assert_allclose(std, [scale], rtol=1e-3)

@@ -401,6 +401,42 @@ def test_a_given_friction_mean_moves_the_estimate_only(dynamics, friction):
     np.testing.assert_array_equal(sliding.error_std, credited.error_std)
 
 
+@pytest.mark.parametrize(
+    ("tau", "error", "message"),
+    [
+        (None, lt.InputValueError, "tau: the motor torque of the last period is missing"),
+        (np.full(N, np.nan), lt.InputValueError, r"tau: not finite \(NaN or Inf\) on joints"),
+        (np.zeros((N, 1)), lt.InputShapeError, r"tau: expected shape \(7,\), got \(7, 1\)"),
+        (np.zeros(N - 1), lt.InputShapeError, r"tau: expected shape \(7,\), got \(6,\)"),
+    ],
+    ids=["none", "nan", "column", "short"],
+)
+def test_a_bad_torque_is_refused_and_the_filter_keeps_its_state(dynamics, friction, tau, error,
+                                                                message):  # fmt: skip
+    """A missing, NaN or misshapen τ raises a one-line error before the filter moves.
+
+    Taken in, a NaN stayed in the estimate for good (every later update read NaN).
+    """
+    q, qd = dynamics.robot.home(), np.full(N, 0.05)
+    good = dynamics.gravity(q) + 0.3
+    refused, untouched = (MomentumObserver(dynamics, friction, DT) for _ in range(2))
+    for observer in (refused, untouched):
+        for _ in range(3):
+            observer.update(q, qd, good)
+    with pytest.raises(error, match=message):
+        refused.update(q, qd, tau)
+    for _ in range(3):
+        np.testing.assert_array_equal(refused.update(q, qd, good), untouched.update(q, qd, good))
+
+
+def test_a_non_finite_position_is_refused_without_a_snapshot(dynamics, friction):
+    """Without the caller's model snapshot, the observer checks q and q̇ itself."""
+    observer = MomentumObserver(dynamics, friction, DT)
+    q = dynamics.robot.home()
+    with pytest.raises(lt.InputValueError, match=r"qd: not finite \(NaN or Inf\) on joints \[2\]"):
+        observer.update(q, np.where(np.arange(N) == 2, np.inf, 0.0), np.zeros(N))
+
+
 def test_time_varying_std_smaller_moving_than_still(data, dynamics, friction):
     """The time-varying filter is more certain while moving than at stand-still."""
     _, moving_std = run(make_observer("time_varying", dynamics, friction), *_inputs(data))

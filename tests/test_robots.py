@@ -4,6 +4,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 import leadthrough as lt
@@ -221,6 +222,33 @@ def test_panda_with_identified_inertials_and_the_shipped_drive_data():
     coulomb = [joint.friction.coulomb for joint in robot.joints]
     assert coulomb == [joint.friction.coulomb for joint in shipped.joints]
     np.testing.assert_allclose(robot.home(), shipped.home())
+
+
+def test_a_published_urdf_with_an_inertia_rounded_below_zero_loads():
+    """A published URDF whose inertia rounds below zero loads, as Pinocchio loads it.
+
+    The UR10e's published identification writes wrist 1's inertia with an eigenvalue of
+    −1.1e-8 against 1.04: rounding of its printed digits.
+    """
+    urdf = REALDATA / "ur10e" / "description" / "ur10e_published_identification.urdf"
+    if not urdf.is_file():
+        pytest.skip(f"real data absent: {urdf}")
+    robot, _ = quietly(lt.robots.from_urdf, urdf, tip="tool0")
+    reference = pin.buildModelFromUrdf(str(urdf))
+    q = np.linspace(-1.0, 1.0, robot.n_joints)
+    np.testing.assert_allclose(lt.Dynamics(robot).gravity(q),
+                               pin.computeGeneralizedGravity(reference, reference.createData(), q),
+                               atol=1e-9)  # fmt: skip
+
+
+def test_an_inertia_off_by_more_than_rounding_is_refused():
+    """Rounding passes (−1e-8 of 1); an eigenvalue of −1e-4 of 1 is an error, naming it."""
+    from leadthrough.validation import symmetric_positive_definite
+
+    rounded = np.diag([1.04, 0.5, -1.1e-8])
+    symmetric_positive_definite("inertia", rounded)
+    with pytest.raises(RobotDescriptionError, match="inertia: inertia must be positive definite"):
+        symmetric_positive_definite("inertia", np.diag([1.0, 0.5, -1e-4]))
 
 
 @pytest.mark.parametrize("name", lt.robots.names())

@@ -278,3 +278,38 @@ def test_per_joint_overrides_of_wrong_length_fail(robots_dir, keyword, values):
     error = _error(robots_dir / UR5, tip="tool0", **{keyword: values})
     assert error.field == keyword
     assert "expected 6 values" in error.reason
+
+
+def _link_masses(path: Path) -> dict[str, float]:
+    """Each link's mass as the URDF writes it [kg]."""
+    from xml.etree import ElementTree
+
+    masses = {}
+    for link in ElementTree.parse(path).getroot().iter("link"):
+        mass = link.find("inertial/mass")
+        masses[str(link.get("name"))] = 0.0 if mass is None else float(mass.get("value"))
+    return masses
+
+
+def test_a_hand_bolted_beyond_the_flange_is_not_part_of_the_arm(robots_dir):
+    """A hand bolted beyond the flange is a tool: ``tip="panda_link8"`` leaves it out.
+
+    ``tip="panda_hand"`` carries it (and its fingers) as part of the last link.
+
+    Before, both tips gave the hand's arm (link 7 at 1.50 kg), and a Panda without the
+    hand read a payload of −0.76 kg on the Gaz et al. run.
+    """
+    path = robots_dir / PANDA
+    written = _link_masses(path)
+    to_flange = lt.robots.from_urdf(path, tip="panda_link8")
+    with_hand = lt.robots.from_urdf(path, tip="panda_hand")
+    carried = sum(joint.link.mass for joint in with_hand.joints)
+    bare = sum(joint.link.mass for joint in to_flange.joints)
+    hand = written["panda_hand"] + written["panda_leftfinger"] + written["panda_rightfinger"]
+    assert carried - bare == pytest.approx(hand, abs=1e-9)
+    beyond = ("panda_link0", "panda_hand", "panda_leftfinger", "panda_rightfinger")  # base, hand
+    arm = sum(mass for name, mass in written.items() if name not in beyond)
+    assert bare == pytest.approx(arm, abs=1e-9)
+    q = to_flange.home()
+    flange = lt.Dynamics(to_flange).pose(q)[:3, 3]
+    np.testing.assert_allclose(flange, lt.Dynamics(with_hand).pose(q)[:3, 3], atol=1e-12)

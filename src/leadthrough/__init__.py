@@ -12,6 +12,7 @@ from leadthrough.control.lead_through import LeadThrough
 from leadthrough.control.parameters import LeadThroughParameters
 from leadthrough.errors import (
     InputShapeError,
+    InputValueError,
     LeadthroughError,
     ParameterError,
     RobotDescriptionError,
@@ -52,6 +53,7 @@ __all__ = [
     "FitReport",
     "FrictionModel",
     "InputShapeError",
+    "InputValueError",
     "Joint",
     "JointFriction",
     "JointLog",

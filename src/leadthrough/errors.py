@@ -34,6 +34,20 @@ class InputShapeError(LeadthroughError, ValueError):
         super().__init__(f"{name}: expected shape {expected}, got {got}")
 
 
+class InputValueError(LeadthroughError, ValueError):
+    """An array passed to an estimator is missing or not finite (NaN, Inf).
+
+    Attributes:
+        name: The argument.
+        reason: What is wrong with it.
+    """
+
+    def __init__(self, name: str, reason: str) -> None:
+        self.name = name
+        self.reason = reason
+        super().__init__(f"{name}: {reason}")
+
+
 class ParameterError(LeadthroughError, ValueError):
     """A parameter of a component (simulator, operator, controller) is invalid.
 

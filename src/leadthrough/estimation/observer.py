@@ -41,7 +41,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from leadthrough.compiled import kernel
-from leadthrough.errors import ParameterError
+from leadthrough.errors import InputShapeError, InputValueError, ParameterError
 from leadthrough.estimation import smooth_rate
 from leadthrough.estimation.smooth_rate import SmoothRateFilter, consider_variance
 from leadthrough.friction.model import FrictionModel
@@ -344,27 +344,33 @@ class MomentumObserver:
 
         Returns:
             The estimated external torque [Nm].
+
+        Raises:
+            InputValueError: ``tau`` is None, or ``tau`` (or, without ``model``, ``q`` or
+                ``qd``) is not finite: the filter's state is left as it was.
+            InputShapeError: An input is not one value per joint (``tau`` may be a scalar).
         """
         q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
+        tau = self._input(tau)
+        if model is None:  # a caller with its own snapshot has checked its sample
+            model = self.dynamics.snapshot(q, qd)
+            _require_finite(q, qd)
         if friction_mean is not None:
             friction_mean = np.ascontiguousarray(np.broadcast_to(friction_mean, qd.shape),
                                                  dtype=float)  # fmt: skip
         self._sample = (q, qd)  # for error_std, computed when read (or by the compiled step)
         self._error_in_filter = False
-        if model is None:
-            model = self.dynamics.snapshot(q, qd)
-        if self._initialised and self._levels is None and self._smooth is None and self.compiled:
-            tau = self._input(tau)
-            if qd.shape == q.shape == tau.shape:  # time-varying: one compiled pass
-                if terms is None:
-                    terms = self.friction.terms_into(qd, q, self._terms)
-                credited = self._no_mean if friction_mean is None else friction_mean
-                _time_varying_step(self._filter, tau, model.mass, qd, model.coriolis_drift,
-                                   model.gravity, terms, credited, friction_mean is not None,
-                                   self.friction.noise_std, self._level_std,
-                                   self._torque_rows, self._constants)  # fmt: skip
-                self._error_in_filter = True
-                return self._tau.copy()
+        compiled = self.compiled and self._levels is None and self._smooth is None
+        if compiled and self._initialised and qd.shape == q.shape:  # time-varying: one pass
+            if terms is None:
+                terms = self.friction.terms_into(qd, q, self._terms)
+            credited = self._no_mean if friction_mean is None else friction_mean
+            _time_varying_step(self._filter, tau, model.mass, qd, model.coriolis_drift,
+                               model.gravity, terms, credited, friction_mean is not None,
+                               self.friction.noise_std, self._level_std,
+                               self._torque_rows, self._constants)  # fmt: skip
+            self._error_in_filter = True
+            return self._tau.copy()
         momentum = model.mass @ qd
         if self._smooth is not None:
             return self._smooth_rate_update(q, qd, tau, model, momentum, friction_mean)
@@ -379,7 +385,6 @@ class MomentumObserver:
             self._previous_drift[:] = model.coriolis_drift - model.gravity - friction_mean
             self._initialised = True
             return self.tau_ext_hat
-        tau = self._input(tau)
         drift = model.coriolis_drift - model.gravity - friction_mean
         # input over the last period: measured torque plus the drift terms (trapezoid)
         u = tau + 0.5 * (drift + self._previous_drift)
@@ -404,7 +409,7 @@ class MomentumObserver:
         credited = friction_mean if applied_friction is None else applied_friction
         drift = model.coriolis_drift - model.gravity - credited
         if self._initialised:
-            u = np.broadcast_to(np.asarray(tau, dtype=float), self._p.shape)
+            u = np.asarray(tau, dtype=float)
             self._smooth.step(self._p, self._tau, u + 0.5 * (drift + self._previous_drift),
                               momentum)  # fmt: skip
         else:
@@ -418,11 +423,26 @@ class MomentumObserver:
         self._std[:] = np.sqrt(self._smooth.torque_variance + considered)
         return self.tau_ext_hat
 
-    def _input(self, tau: ArrayLike) -> FloatArray:
-        """The motor torque [Nm] as (n,) floats: a scalar broadcasts, a wrong shape raises."""
+    def _input(self, tau: ArrayLike | None) -> FloatArray:
+        """The motor torque [Nm] as (n,) floats: a scalar broadcasts, anything else raises.
+
+        Checked before the filter moves, so that a bad sample leaves its state as it was
+        (a NaN taken in would stay in the estimate for good).
+
+        Raises:
+            InputValueError: ``tau`` is None or not finite.
+            InputShapeError: ``tau`` is neither a scalar nor one value per joint.
+        """
+        if tau is None:
+            raise InputValueError("tau", "the motor torque of the last period is missing (None)")
         tau = np.asarray(tau, dtype=float)
-        if tau.shape != self._p.shape:  # as in NumPy
-            tau = np.ascontiguousarray(np.broadcast_to(tau, self._p.shape))
+        if tau.shape != self._p.shape:
+            if tau.ndim:
+                raise InputShapeError("tau", self._p.shape, tau.shape)
+            tau = np.full(self._p.shape, float(tau))
+        if not math.isfinite(tau.sum()):  # a NaN or Inf anywhere makes the sum one
+            bad = np.flatnonzero(~np.isfinite(tau)).tolist()
+            raise InputValueError("tau", f"not finite (NaN or Inf) on joints {bad}")
         return tau
 
     def _gains(
@@ -472,6 +492,14 @@ class MomentumObserver:
                 for key, value in (("k1", gain[0]), ("k2", gain[1]), ("std", std)):
                     levels.setdefault(f"{key}_{name}", []).append(value)
         return {key: np.array(values) for key, values in levels.items()} | {"threshold": threshold}
+
+
+def _require_finite(q: FloatArray, qd: FloatArray) -> None:
+    """Raise :class:`InputValueError` if a position or velocity is NaN or Inf."""
+    for name, value in (("q", q), ("qd", qd)):
+        if not np.isfinite(value).all():
+            bad = np.flatnonzero(~np.isfinite(value)).tolist()
+            raise InputValueError(name, f"not finite (NaN or Inf) on joints {bad}")
 
 
 @kernel

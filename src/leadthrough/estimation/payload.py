@@ -67,6 +67,12 @@ class PayloadError(LeadthroughError, ValueError):
     """The logs cannot tell a payload (no logs, too short, nothing excites it)."""
 
 
+#: Logs whose every joint stays within this of one value hold one pose [rad]: there the
+#: per-joint offsets take up any payload torque, and the component of m c along gravity
+#: turns no joint, so m and c are not separable (a static hold reads 91 m off the flange).
+ONE_POSE = 0.01
+
+
 @dataclass(frozen=True)
 class PayloadParameters:
     """Settings of the payload regression.
@@ -173,7 +179,8 @@ def estimate_payload(
         Mass [kg] and centre of mass in the flange frame [m] with their std.
 
     Raises:
-        PayloadError: No logs, or the data cannot separate mass and centre of mass.
+        PayloadError: No logs, logs of one pose (:data:`ONE_POSE`), or data that cannot
+            separate mass and centre of mass.
         LogInputError: A log without torque or current, or with another joint count.
     """
     logs = [logs] if isinstance(logs, JointLog) else list(logs)
@@ -186,6 +193,7 @@ def estimate_payload(
 
     def fit(runs: list[JointLog]) -> _Fit:
         rows = _rows(runs, regressor, friction, parameters)
+        _require_poses(runs)
         return _fit(rows, parameters, coulomb, regressor.point_inertia_parameters)
 
     loaded = fit(logs)
@@ -198,6 +206,17 @@ def estimate_payload(
     systematic = (parameters.model_error**2 * (bias @ bias.T)
                   + parameters.gain_error**2 * (gain @ gain.T))  # fmt: skip
     return _estimate(theta, covariance + systematic, loaded.rms, loaded.count)
+
+
+def _require_poses(runs: list[JointLog]) -> None:
+    """Raise :class:`PayloadError` if ``runs`` together hold one pose (:data:`ONE_POSE`)."""
+    q = np.concatenate([np.asarray(run.q, dtype=float) for run in runs])
+    span = float(np.max(np.ptp(q, axis=0))) if q.size else 0.0
+    if span < ONE_POSE:
+        names = ", ".join(str(run.source or "log") for run in runs[:3])
+        raise PayloadError(f"{names}: the logs hold one pose (no joint moved more than "
+                           f"{span * 1e3:.1f} mrad): a payload's mass and centre of mass "
+                           "need several poses or a motion")  # fmt: skip
 
 
 @dataclass(frozen=True, eq=False)

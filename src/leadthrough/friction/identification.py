@@ -42,7 +42,7 @@ from leadthrough.errors import LeadthroughError
 from leadthrough.filters import low_pass_signal, pole
 from leadthrough.friction.along_travel import level_along_travel, level_error
 from leadthrough.friction.model import FrictionModel, level_stays_positive, sigmoid
-from leadthrough.model.description import FloatArray
+from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 
 #: Smallest relative Coulomb error an identification claims (a model is never perfect).
@@ -145,7 +145,7 @@ class FrictionSamples:
 
 def identify_friction(
     logs: Any,
-    dynamics: Dynamics,
+    dynamics: Dynamics | RobotDescription,
     joints: Sequence[int] | None = None,
     settings: IdentificationSettings | None = None,
     prior: FrictionModel | None = None,
@@ -155,7 +155,8 @@ def identify_friction(
     Args:
         logs: One log or a list of logs (mappings or objects with arrays ``t`` (N,),
             ``q``, ``qd``, ``tau`` (N, n)); ``tau`` is the measured motor torque, arm side.
-        dynamics: Model used to remove gravity and inertia torques.
+        dynamics: Model used to remove gravity and inertia torques (or the robot
+            description, whose model is then built here).
         joints: Joints to identify (default: every joint that moved in some log and
             slid for at least ``settings.minimum_samples`` samples; a joint that only
             twitched is left at the prior rather than failing the whole fit).
@@ -172,6 +173,8 @@ def identify_friction(
             never moved.
     """
     settings = settings or IdentificationSettings()
+    if isinstance(dynamics, RobotDescription):
+        dynamics = Dynamics(dynamics)
     samples = friction_samples(logs, dynamics, settings)
     return fit_friction(samples, dynamics, joints, settings, prior)
 

@@ -41,7 +41,7 @@ import tomli_w
 from numpy.typing import ArrayLike, NDArray
 
 from leadthrough.compiled import kernel
-from leadthrough.errors import ParameterError
+from leadthrough.errors import InputShapeError, ParameterError
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.validation import real_array
 
@@ -179,8 +179,16 @@ class FrictionModel:
 
         Since 2 s(x) − 1 = tanh(x/2), the sigmoid pair, mean and uncertainty are sums and
         differences of the two tanh terms: one evaluation serves them all.
+
+        Raises:
+            InputShapeError: ``qd`` or ``q`` has a last axis of neither one value per
+                joint nor 1 (NumPy's broadcasting: every joint at that value; a (k, 1)
+                column gives the (k, n) table of every joint at each of k velocities).
         """
         qd = np.asarray(qd, dtype=float)
+        self._check_joint_axis("qd", qd)
+        if q is not None:
+            self._check_joint_axis("q", np.asarray(q))
         small = qd.size <= _REMEMBERED_SIZE  # one control period's q̇: remember the terms
         if small:
             shape_q = None if q is None else (np.shape(q), np.asarray(q, float).tobytes())
@@ -195,6 +203,13 @@ class FrictionModel:
         if small:
             self._last[0] = (key, terms)
         return terms
+
+    def _check_joint_axis(self, name: str, value: NDArray[Any]) -> None:
+        """Raise unless ``value``'s last axis is one value per joint, or 1, or absent."""
+        n = self.coulomb.shape[0]
+        if value.ndim and value.shape[-1] not in (n, 1):
+            raise InputShapeError(f"{name} (one value per joint on the last axis)", (n,),
+                                  value.shape)  # fmt: skip
 
     def terms_into(self, qd: FloatArray, q: FloatArray, out: FloatArray) -> FloatArray:
         """:meth:`sigmoid_terms` of one sample, written into ``out`` in one compiled pass.

@@ -109,6 +109,7 @@ def from_urdf(
         raise RobotDescriptionError(source, "", f"cannot read it ({error})") from None
     try:
         text, continuous = _bounded_continuous_joints(text, source)
+        text = _without_tools_beyond(text, tip)
         full = pin.buildModelFromXML(text)
     except RobotDescriptionError:
         raise  # a continuous joint without its limits, named
@@ -161,6 +162,43 @@ def _bounded_continuous_joints(text: str, source: str) -> tuple[str, set[str]]:
         limit.set("upper", f"{CONTINUOUS_LIMIT!r}")
     names = {str(joint.get("name")) for joint in continuous}
     return ElementTree.tostring(root, encoding="unicode"), names
+
+
+def _without_tools_beyond(text: str, tip: str | None) -> str:
+    """URDF ``text`` without what is bolted beyond the link ``tip`` (unchanged without).
+
+    The tip is the flange: a body fixed to it by a ``fixed`` joint (a hand, a tool), and
+    everything that body carries, is a tool or a payload, not the arm. Pinocchio would
+    fold its inertia into the last link: ``tip="panda_link8"`` then carried the Franka
+    hand's 0.76 kg, and a Panda without it (the Gaz et al. run) read a payload of −0.76
+    kg. Moving parts of the tip link itself (a gripper's fingers when the tip is its
+    hand) stay, locked at their neutral position.
+    """
+    if tip is None:
+        return text
+    root = ElementTree.fromstring(text)
+    joints = list(root.iter("joint"))
+    children: dict[str, list[ElementTree.Element]] = {}
+    for joint in joints:
+        parent = joint.find("parent")
+        if parent is not None:
+            children.setdefault(str(parent.get("link")), []).append(joint)
+    beyond = [j for j in children.get(tip, []) if j.get("type") == "fixed"]
+    if not beyond:
+        return text
+    links = {str(link.get("name")): link for link in root.iter("link")}
+    removed_joints: list[ElementTree.Element] = []
+    while beyond:
+        joint = beyond.pop()
+        removed_joints.append(joint)
+        child = joint.find("child")
+        name = "" if child is None else str(child.get("link"))
+        if name in links:
+            root.remove(links.pop(name))
+        beyond.extend(children.get(name, []))
+    for joint in removed_joints:
+        root.remove(joint)
+    return ElementTree.tostring(root, encoding="unicode")
 
 
 def _chain(model: pin.Model, tip: str | None) -> tuple[list[int], str | None]:
