@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 
 import numpy as np
 import pytest
@@ -291,3 +292,131 @@ def test_teaching_records_on_any_driver(tmp_path):
     assert recording.tool_wrench_covariance.shape == (100, 6, 6)
     assert all(0.0 <= event.t < 0.4 for event in recording.events)
     assert recording.complete and "recorded 100 periods" in report.summary()
+
+
+def test_a_ctrl_c_before_the_first_period_holds_the_arm_against_gravity():
+    """Ctrl-C while the controller warms up: the safe stop holds the arm where it is.
+
+    The loop's safe stop checks each sample it reads, so the supervisor knows a good pose
+    even when no period was stepped; it sent zero torque before, and the YuMi sagged by up
+    to 0.83 rad in the 0.5 s of the stop.
+    """
+    robot = ShiftedClock(DigitalTwin(ROBOT), 0.0)
+    controller = lt.LeadThrough(ROBOT, "passive")
+    start = robot.read_state().q
+
+    def interrupted() -> float:
+        raise KeyboardInterrupt
+
+    controller.warm_up = interrupted  # type: ignore[method-assign]
+    report = lt.control_loop(robot, controller, duration=1.0, wall_clock=False)
+    assert report.periods == 0 and report.ended == "interrupted by the operator (Ctrl-C)"
+    gravity = lt.Dynamics(ROBOT).gravity(start)
+    np.testing.assert_allclose(robot.sent[0], gravity, atol=0.01)  # the hold, at once [Nm]
+    assert np.max(np.abs(robot.read_state().q - start)) < 1e-3  # [rad]
+
+
+def test_a_reset_forgets_the_pose_it_held():
+    """After reset(), a first sample that is bad gets what a fresh controller sends.
+
+    Before, the safe stop held gravity for the pose of before the reset: at another pose,
+    torques of up to 3.6 Nm where the arm needed 2.1 Nm the other way.
+    """
+    q_before, q_after = ROBOT.home(), ROBOT.home() + np.array([0.8, -0.6, 0.4, 0.6, 0, 0, 0])
+    bad = JointState(1.0, np.where(np.arange(N) == 6, np.nan, q_after), np.zeros(N), None)
+    used = lt.LeadThrough(ROBOT, "passive")
+    for k in range(5):
+        used.step(JointState(0.004 * k, q_before, np.zeros(N), None))
+    used.reset()
+    fresh = lt.LeadThrough(ROBOT, "passive")
+    np.testing.assert_array_equal(used.step(bad), fresh.step(bad))
+    assert used.state is SupervisorState.FAULT and "joint 7 position" in str(
+        used.supervisor.fault_reason
+    )
+
+
+@pytest.mark.parametrize(
+    ("stamp", "reason"),
+    [
+        (np.nan, "time stamp nan is not finite"),
+        (None, "time stamp None is not a number"),
+        ("0.2", "time stamp '0.2' is not a number"),
+        (1.2, r"time stamp jumped 1 s, from 0.200000 to 1.200000 s \(more than max_time_gap"),
+    ],
+    ids=["nan", "none", "string", "jump"],
+)
+def test_a_bad_time_stamp_is_a_fault_with_the_damped_stop(stamp, reason):
+    """A time stamp that is not a finite number of seconds, or jumps, is a one-line fault.
+
+    The arm moving at 0.3 rad/s gets the damped safe stop. Before, a NaN stamp reached the
+    dither ("cannot convert float NaN to integer") and its NaN fault time left the stop
+    undamped for good; None escaped step() as a TypeError; a string was taken.
+    """
+    controller, qd = lt.LeadThrough(ROBOT, "passive"), np.full(N, 0.3)
+    q = ROBOT.home() + 0.004 * np.arange(52)[:, None] * qd  # the arm moving [rad]
+    for k in range(51):
+        controller.step(JointState(0.004 * k, q[k], qd, None))
+    command = controller.step(JointState(stamp, q[51], qd, None))
+    assert controller.state is SupervisorState.FAULT
+    assert controller.supervisor.fault_reason is not None
+    assert re.match(reason, controller.supervisor.fault_reason), controller.supervisor.fault_reason
+    damping = command - lt.Dynamics(ROBOT).gravity(q[51])
+    assert np.all(damping[:4] < -0.1)  # braking the motion [Nm], not G alone
+    later = controller.step(JointState(0.208, q[51], qd, None))
+    np.testing.assert_allclose(later, command, atol=1e-9)  # still damped, a good stamp after
+
+
+def test_a_clock_in_milliseconds_stops_the_calibration_before_any_kick():
+    """A driver stamping milliseconds (4 per period at 250 Hz): the second sample faults.
+
+    Before, the start-up calibration integrated 4 s of error in one period and sent the
+    torque limits (30, 30, 30, 20 Nm) with nobody at the arm.
+    """
+
+    class Milliseconds(ShiftedClock):
+        def read_state(self) -> JointState:
+            state = self.twin.read_state()
+            return JointState(1e3 * state.t, state.q, state.qd, state.tau_measured)
+
+    robot = Milliseconds(DigitalTwin(ROBOT), 0.0)
+    controller = lt.LeadThrough(ROBOT, "active", calibrate=True)
+    lt.control_loop(robot, controller, duration=0.4, wall_clock=False)
+    assert "time stamp jumped 4 s" in str(controller.supervisor.fault_reason)
+    gravity = lt.Dynamics(ROBOT).gravity(ROBOT.home())
+    assert np.max(np.abs(np.array(robot.sent) - gravity)) < 2.0  # [Nm]
+
+
+class Ordered(ShiftedClock):
+    """A driver that notes each command sent in a shared journal."""
+
+    def __init__(self, twin: DigitalTwin, journal: list[str]) -> None:
+        super().__init__(twin, 0.0)
+        self.journal = journal
+
+    def send_torque(self, tau) -> None:
+        """Note, then send."""
+        self.journal.append("send")
+        super().send_torque(tau)
+
+
+def test_teaching_records_after_the_command_is_sent_and_warms_up_first(tmp_path, monkeypatch):
+    """The recorder's writes and flushes are off the timed path; the kernels compile first.
+
+    Before, each period was written (and every 0.1 s fsynced) inside the timed step, ahead
+    of its command, and teaching skipped the warm-up: its first period compiled.
+    """
+    from leadthrough.runtime import recording
+
+    journal: list[str] = []
+    original = recording.SessionRecorder.record
+
+    def noted(self, *args, **kwargs):
+        journal.append("record")
+        return original(self, *args, **kwargs)
+
+    monkeypatch.setattr(recording.SessionRecorder, "record", noted)
+    robot = Ordered(DigitalTwin(ROBOT), journal)
+    report = teach(robot, lt.LeadThrough(ROBOT, "passive"), tmp_path / "t.mcap", duration=0.04,
+                   wall_clock=False)  # fmt: skip
+    assert journal == ["send", "record"] * 10
+    assert report.loop.warm_up > 0.0

@@ -427,11 +427,12 @@ class LeadThrough:
         An exception inside the step latches the supervisor's fault, naming the exception
         and the component it came from, and the safe stop is returned this period.
         """
-        t, q, qd, tau_measured = self._sample(state, qd, tau_measured)
+        stamp, q, qd, tau_measured = self._sample(state, qd, tau_measured)
         supervisor = self.supervisor
-        if not supervisor.check(t, q, qd, tau_measured):
+        if not supervisor.check(stamp, q, qd, tau_measured):  # the time stamp too
             zeros = np.zeros(self.robot.n_joints)
-            return self._send(supervisor.command(t, q, qd, zeros), zeros)
+            return self._send(supervisor.command(stamp, q, qd, zeros), zeros)
+        t = self._t  # the stamp, checked: a finite number of seconds
         try:
             self._stage = "model"
             self.model = model = self.dynamics.snapshot(q, qd)
@@ -454,18 +455,27 @@ class LeadThrough:
 
     def _sample(
         self, state: JointState | ArrayLike, qd: ArrayLike | None, tau: ArrayLike | None
-    ) -> tuple[float, FloatArray, FloatArray, FloatArray | None]:
-        """(t, q, q̇, τ) of this period; the positional form counts periods of ``dt``."""
+    ) -> tuple[object, FloatArray, FloatArray, FloatArray | None]:
+        """(t, q, q̇, τ) of this period; the positional form counts periods of ``dt``.
+
+        ``t`` as the robot stamped it: the supervisor judges it (a number, finite, no
+        gap), and :attr:`time` takes it only if it is a finite number.
+        """
         if not isinstance(state, JointState):
             self._own_clock += self.dt
         sample = joint_state(state, qd, tau, self._own_clock)
-        self._t = float(sample.t)
+        try:
+            stamp = float(sample.t)
+        except (TypeError, ValueError):
+            stamp = math.nan
+        if math.isfinite(stamp) and not isinstance(sample.t, str | bytes):
+            self._t = stamp
         try:
             self._enabling = enabling_state(sample.enabling)
         except ValueError as error:  # a reading nobody can trust: the safe stop
             self._enabling = False
             self.supervisor.stop(str(error), self._t)
-        return self._t, sample.q, sample.qd, sample.tau_measured
+        return sample.t, sample.q, sample.qd, sample.tau_measured
 
     def _send(self, command: FloatArray, dither: FloatArray) -> FloatArray:
         self._sent.push((command, dither))

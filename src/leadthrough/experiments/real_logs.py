@@ -29,6 +29,7 @@ from leadthrough.friction.model import FrictionModel
 from leadthrough.logs.log import JointLog
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
+from leadthrough.safety.limits import SafetyParameters
 from leadthrough.safety.supervisor import SafetySupervisor
 
 
@@ -60,10 +61,13 @@ def supervisor_verdict(log: JointLog, robot: RobotDescription) -> tuple[float, s
 
     Returns:
         (time from the log's start [s], the one-line reason) of the first sample it
-        would fault on (a reading out of range, non-finite, or stale), or None.
+        would fault on (a reading out of range, non-finite, or stale), or None. Its gaps
+        in time are not judged: they are where the reader dropped corrupted rows, which a
+        live supervisor would have faulted on themselves.
     """
     torque = measured_torque(log, robot)
-    supervisor = SafetySupervisor(Dynamics(robot), log.median_period)
+    every_gap = SafetyParameters(max_time_gap=None)
+    supervisor = SafetySupervisor(Dynamics(robot), log.median_period, every_gap)
     for k in range(log.n_samples):
         if not supervisor.check(float(log.t[k]), log.q[k], log.qd[k], torque[k]):
             return float(log.t[k] - log.t[0]), str(supervisor.fault_reason)

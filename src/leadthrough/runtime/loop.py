@@ -23,7 +23,8 @@ command leaving; on a robot with a wall clock one longer than the period is a mi
 deadline, counted and logged by the controller's supervisor (``supervisor.record_cycle``).
 A simulated driver (``wall_clock=False``) paces nothing in real time: compute times are
 still measured and reported, not held against the period. What runs after the command
-is sent (``after_period``, e.g. a recorder) is off the critical path.
+is sent is off the critical path: the controller's own ``after_period(state, command)``
+(if it has one: a teaching session records there), then the caller's ``after_period``.
 
 No exception escapes without the safe stop first: on Ctrl-C, an error of the robot, the
 controller or ``after_period``, the supervisor latches a fault naming the cause, the arm
@@ -115,8 +116,9 @@ def control_loop(
             docstring); with a ``supervisor``, its deadlines and safe stop are used.
         duration: How long to run [s]; None runs until ``until`` or Ctrl-C.
         until: Called with each new sample; True ends the loop (before stepping).
-        after_period: Called after each command is sent, with the sample and the command
-            (recording, display); its errors bring the safe stop like any other.
+        after_period: Called after each command is sent (and after the controller's own
+            ``after_period``), with the sample and the command (recording, display); its
+            errors bring the safe stop like any other.
         stop_time: How long the safe stop is commanded after an interruption [s].
         wall_clock: Whether the robot runs in real time (hardware): then a compute time
             above the period is an overrun. False for a simulated driver (the twin).
@@ -136,6 +138,7 @@ def control_loop(
     step = stepper(controller)
     periods = None if duration is None else round(duration / robot.dt)
     supervisor: SafetySupervisor | None = getattr(controller, "supervisor", None)
+    controller_after = getattr(controller, "after_period", None)  # its work off the timed path
     overruns_before = supervisor.overruns if supervisor is not None else 0
     compute = array("d")
     ended, k, t, warmed = "finished", 0, None, 0.0
@@ -156,6 +159,8 @@ def control_loop(
                 supervisor.record_cycle(state.t, elapsed)
             compute.append(elapsed)
             k += 1
+            if controller_after is not None:
+                controller_after(state, command)
             if after_period is not None:
                 after_period(state, command)
             state = robot.read_state()
@@ -228,6 +233,9 @@ def _safe_stop(
         nothing = np.zeros(robot.n_joints)
         for _ in range(max(1, round(stop_time / robot.dt))):
             state = robot.read_state()
+            # checked first: interrupted before any sample was stepped (in the warm-up, or
+            # the first read failing), the supervisor has no good position to hold yet
+            supervisor.check(state.t, state.q, state.qd, state.tau_measured)
             robot.send_torque(supervisor.command(state.t, state.q, state.qd, nothing))
     except Exception as error:
         supervisor.log("safe_stop_failed", f"the safe stop could not be sent: "

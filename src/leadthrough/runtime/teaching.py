@@ -32,7 +32,11 @@ from leadthrough.runtime.recording import SessionRecorder
 
 
 class TeachingSession:
-    """A LeadThrough whose taught periods are recorded: ``step(state)`` once per period.
+    """A LeadThrough whose taught periods are recorded once each command has gone out.
+
+    ``step(state)`` controls; ``after_period(state, command)``, the control loop's
+    callback after the command is sent, records: the file's writes and flushes stay off
+    the timed path to the motors.
 
     Attributes:
         controller: The lead-through controller.
@@ -53,9 +57,16 @@ class TeachingSession:
         self._t0: float | None = None
         self._events = 0
 
+    def warm_up(self) -> float:
+        """The controller's warm-up (:meth:`LeadThrough.warm_up`), before the first period."""
+        return self.controller.warm_up()
+
     def step(self, state: JointState) -> FloatArray:
-        """Control one period on the robot's sample and record it (unless calibrating)."""
-        command = self.controller.step(state)
+        """The controller's command for one period on the robot's sample [Nm]."""
+        return self.controller.step(state)
+
+    def after_period(self, state: JointState, command: FloatArray) -> None:
+        """Record the period just sent (unless calibrating) and the supervisor's events."""
         if self._t0 is None:
             self._t0 = float(state.t)
         self.time = float(state.t) - self._t0
@@ -67,7 +78,6 @@ class TeachingSession:
                                  c.state.value, c.tool_wrench, c.enabling)  # fmt: skip
             self.recorded += 1
         self.record_events()
-        return command
 
     def record_events(self) -> None:
         """Record the supervisor's events not recorded yet, on the session clock.

@@ -7,6 +7,8 @@ its repeats (:meth:`FrozenEncoders.count`); the reasons are only spelled out for
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -54,6 +56,31 @@ def within_bounds(values: FloatArray, low: FloatArray, high: FloatArray, offset:
         if not low[offset + i] <= values[i] <= high[offset + i]:
             return False
     return True
+
+
+def time_problem(t: object, previous: float | None, max_gap: float | None) -> str | None:
+    """Why a sample's time stamp cannot be used, or None.
+
+    Args:
+        t: The time stamp [s].
+        previous: The previous sample's [s] (None: none since the start or a reset).
+        max_gap: The longest a sample may come after the one before [s]
+            (``SafetyParameters.max_time_gap``; None: any). A stamp that repeats or goes
+            back is taken as it is (a driver's clock may be coarse).
+    """
+    try:
+        if isinstance(t, str | bytes):
+            raise TypeError("a string")
+        value = float(t)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return f"time stamp {t!r} is not a number"
+    if not math.isfinite(value):
+        return f"time stamp {value} is not finite"
+    if previous is not None and max_gap is not None and value - previous > max_gap:
+        return (f"time stamp jumped {value - previous:.4g} s, from {previous:.6f} to "
+                f"{value:.6f} s (more than max_time_gap {max_gap:g} s): samples lost, or a "
+                "clock not in seconds")  # fmt: skip
+    return None
 
 
 def sample_reason(

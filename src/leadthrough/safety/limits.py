@@ -33,6 +33,12 @@ class SafetyParameters:
         velocity_reading_margin: Velocities beyond this × the speed limit are out of range.
         position_reading_margin: Positions this far beyond the hard limits are out of range [rad].
         safe_stop_damping_time: Duration of the damped hold after a fault [s], then no damping.
+        max_time_gap: A sample stamped more than this after the one before is a fault [s]:
+            samples lost (the arm ran on its last command meanwhile), or a clock not in
+            seconds (a driver stamping milliseconds jumps 4 s a period at 250 Hz, and the
+            start-up calibration's integral took it whole: a kick to the torque limits).
+            Their jitter reaches 34 ms on the public UR10e logs at 100 Hz. None: no check
+            (a log replayed whose gaps are rows dropped as corrupted, up to 0.46 s there).
     """
 
     tool_speed_limit: float = 0.25
@@ -47,6 +53,7 @@ class SafetyParameters:
     velocity_reading_margin: float = 2.0
     position_reading_margin: float = 0.1
     safe_stop_damping_time: float = 0.5
+    max_time_gap: float | None = 0.25
 
     def __post_init__(self) -> None:
         for name in ("tool_speed_limit", "braking_time", "soft_limit_margin", "wall_damping_time"):
@@ -58,6 +65,9 @@ class SafetyParameters:
         for name in ("torque_reading_margin", "velocity_reading_margin"):
             real(name, getattr(self, name), minimum=1.0, error=ParameterError)
         real("stale_speed", self.stale_speed, minimum=0.0, strict=True, error=ParameterError)
+        if self.max_time_gap is not None:
+            real("max_time_gap", self.max_time_gap, minimum=0.0, strict=True,
+                 error=ParameterError)  # fmt: skip
         for name in ("position_reading_margin", "safe_stop_damping_time"):
             real(name, getattr(self, name), minimum=0.0, error=ParameterError)
         stale = self.stale_periods

@@ -27,6 +27,7 @@ episode) in :mod:`.events`; this module holds the state machine.
 
 from __future__ import annotations
 
+import math
 from enum import StrEnum
 
 import numpy as np
@@ -45,6 +46,7 @@ from leadthrough.safety.checks import (
     floats,
     in_range,
     sample_reason,
+    time_problem,
     trusted_velocity,
 )
 from leadthrough.safety.command import (
@@ -103,7 +105,8 @@ class SafetySupervisor:
         self._log_book = EventLog()
         self.overruns = 0
         self.max_tool_speed = 0.0
-        self._t = 0.0
+        self._t = 0.0  # the latest finite time stamp [s]
+        self._t_checked: float | None = None  # the last checked sample's (None: none yet)
         self._fault_time = 0.0
         self._q_last_good: FloatArray | None = None
         self._in_overrun = False
@@ -153,7 +156,7 @@ class SafetySupervisor:
                 counts from it.
         """
         if t is not None:
-            self._t = float(t)
+            self._clock(t)
         self._fault(reason)
 
     def log(self, kind: str, detail: str, t: float | None = None) -> None:
@@ -161,19 +164,27 @@ class SafetySupervisor:
         self._log_book.add(self._t if t is None else t, kind, detail)
 
     def reset(self) -> None:
-        """Clear a latched fault and go to HOLDING; frozen-encoder counters restart."""
+        """Clear a latched fault and go to HOLDING; start afresh.
+
+        The frozen-encoder counters restart, and the last good position and time stamp
+        are forgotten: a safe stop before the next good sample must not hold the arm
+        against gravity at a pose it has left, and a pause before the reset is no gap.
+        """
         self.state = SupervisorState.HOLDING
         self.fault_reason = None
+        self._q_last_good = None
+        self._t_checked = None
         self._clear_episodes()
         self._log("reset", "supervisor reset: holding")
 
     def check(
-        self, t: float, q: ArrayLike, qd: ArrayLike, tau_measured: ArrayLike | None = None
+        self, t: object, q: ArrayLike, qd: ArrayLike, tau_measured: ArrayLike | None = None
     ) -> bool:
         """Validate one sensor sample; a bad one latches FAULT with the reason.
 
         Args:
-            t: Time of the sample [s].
+            t: Time of the sample [s]: a finite number, at most ``max_time_gap`` after the
+                previous sample's (:func:`~.checks.time_problem`), else a fault.
             q: Joint readings [rad], shape (n,).
             qd: Joint velocities [rad/s], shape (n,).
             tau_measured: Measured joint torques, arm side [Nm], shape (n,), or None.
@@ -182,7 +193,9 @@ class SafetySupervisor:
             True when the sample is good and no fault is latched.
         """
         try:
-            self._t = float(t)
+            late = time_problem(t, self._t_checked, self.parameters.max_time_gap)
+            self._clock(t)
+            self._t_checked = self._t
             position, velocity = floats(q), as_floats(qd)  # q is kept: a copy
             tau = None if tau_measured is None else as_floats(tau_measured)
             limits, count = self._limits, OUT_OF_RANGE
@@ -195,16 +208,18 @@ class SafetySupervisor:
             else:
                 problem = self._encoders.reason(count)
         except Exception as error:  # nothing may escape on the motor path
-            problem = failure("sensor check", error)
+            problem, late = failure("sensor check", error), None
+        if problem is None:  # a good position is held in a safe stop, whatever its time
+            self._q_last_good = position
+        problem = problem or late
         if problem is not None:
             self._fault(problem)
             return False
-        self._q_last_good = position
         return self.state is not SupervisorState.FAULT
 
     def command(
         self,
-        t: float,
+        t: object,
         q: ArrayLike,
         qd: ArrayLike,
         tau_desired: ArrayLike,
@@ -216,7 +231,8 @@ class SafetySupervisor:
         saturated desired torque plus the soft-limit walls and the braking torques.
 
         Args:
-            t: Time of the period [s].
+            t: Time of the period [s] (one that is not a finite number is not taken:
+                :meth:`check` says why).
             q: Joint readings [rad], shape (n,).
             qd: Joint velocities [rad/s], shape (n,).
             tau_desired: The controller's torque [Nm], shape (n,).
@@ -224,7 +240,7 @@ class SafetySupervisor:
                 the caller has it; else it is computed here.
         """
         try:
-            self._t = float(t)
+            self._clock(t)
             if self.state is not SupervisorState.FAULT:
                 tau = self._supervised(floats(q), as_floats(qd), as_floats(tau_desired), model)
                 if tau is not None:
@@ -358,6 +374,19 @@ class SafetySupervisor:
         self.state = mode
         self._log_book.end("tool_speed")
         self._log("mode", f"mode {mode.value}")
+
+    def _clock(self, t: object) -> None:
+        """Take ``t`` as the latest time [s] if it is a finite number; else keep the last.
+
+        The safe stop's damped phase counts from the fault's time: a NaN there left it
+        undamped for good (every comparison False), an Inf damped for good.
+        """
+        try:
+            value = float(t)  # type: ignore[arg-type]
+        except (TypeError, ValueError):
+            return
+        if math.isfinite(value) and not isinstance(t, str | bytes):
+            self._t = value
 
     def _fault(self, reason: str) -> None:
         """Latch FAULT with ``reason``; the first reason is kept until reset."""
