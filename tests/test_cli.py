@@ -88,7 +88,61 @@ def test_identify_on_twin_then_from_saved_log(tmp_path, capsys):
     assert log_model.coulomb[6] == twin_model.coulomb[6]
 
 
+def test_identify_draws_a_run_that_moved_every_joint(tmp_path):
+    """One excitation CSV whose run moves several joints at once: identified and drawn.
+
+    The figures took each joint's samples from the run that excited it alone, and there
+    was none: "need at least one array to concatenate" after half the files were written.
+    """
+    import numpy as np
+
+    import leadthrough as lt
+    from leadthrough.friction.logs import save_logs
+
+    robot = lt.robots.yumi()
+    dynamics, friction = lt.Dynamics(robot), lt.FrictionModel.from_robot(robot)
+    t = np.arange(0.0, 20.0, 0.004)
+    phase = 2 * np.pi * (0.2 + 0.05 * np.arange(7)) * t[:, None]
+    q = robot.home() + 0.5 * np.sin(phase)
+    qd = 0.5 * 2 * np.pi * (0.2 + 0.05 * np.arange(7)) * np.cos(phase)
+    qdd = np.gradient(qd, t, axis=0)
+    tau = np.array([dynamics.inverse_dynamics(*row) for row in zip(q, qd, qdd, strict=True)])
+    path = save_logs([{"t": t, "q": q, "qd": qd, "tau": tau + friction.mean(qd)}],
+                     tmp_path / "run.csv")  # fmt: skip
+    assert main(["identify", "--log", str(path), "--out", str(tmp_path / "out")]) == 0
+    assert (tmp_path / "out" / "friction.toml").is_file()
+    assert len(list((tmp_path / "out").glob("joint*.png"))) > 4
+
+
 def test_identify_rejects_bad_joint_list(capsys):
     """A joint number out of range is a one-line error, exit code 2."""
     assert main(["identify", "--joints", "9"]) == 2
     assert "joints are numbered 1 to 7" in capsys.readouterr().err
+
+
+def test_identify_says_a_log_of_currents_needs_torque_constants(tmp_path, capsys):
+    """A UR log of motor currents for an arm without K: one line, exit 2, before any fit.
+
+    It failed deep in the friction fit ("'tau' has shape ()"); and the reader's warning
+    about rows dropped as corrupted was silenced for the user's own logs.
+    """
+    import warnings
+
+    import numpy as np
+
+    t = 1234.5 + 0.008 * np.arange(400)
+    q = 1.0 + 0.3 * np.sin(np.outer(t - t[0], np.arange(1, 7) * 0.5))
+    table = np.column_stack([t, *q.T, *np.gradient(q, t, axis=0).T, *(0.5 + 0.1 * q).T])
+    lines = [",".join(f"{v:.6f}" for v in row) for row in table]
+    lines[100] = lines[100].replace("1.", "253.", 1)  # a corrupted row, as UR logs have
+    path = tmp_path / "run.csv"
+    path.write_text("\n".join(lines) + "\n")
+    from leadthrough.model.robots import AssumedDriveDataWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", AssumedDriveDataWarning)  # the UR5's, known
+        assert main(["identify", "--robot", "ur5", "--log", str(path), "--out",
+                     str(tmp_path / "out")]) == 2  # fmt: skip
+    err = capsys.readouterr().err
+    assert "dropped 1 of 400 rows as corrupted" in err
+    assert "run.csv: the log has motor currents but ur5 has no torque constants" in err

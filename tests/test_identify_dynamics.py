@@ -179,3 +179,19 @@ def test_a_gains_std_counts_the_scale_the_data_cannot_see():
                     np.array([gain]), (prior_std, gain_prior))  # fmt: skip
     scale = gain / np.sqrt(np.sum((pi / prior_std) ** 2) + (gain / gain_prior) ** 2)
     np.testing.assert_allclose(std, [scale], rtol=1e-3)
+
+
+def test_a_sample_alone_in_its_window_is_smoothed_to_itself():
+    """A sample alone in its window keeps its value, with no slope.
+
+    Rows dropped around one sample (a corrupted log, a dropout) left its fit singular:
+    identify crashed on the public UR10e run with 19 corrupted rows. The samples that
+    have neighbours are smoothed as without it.
+    """
+    t = np.concatenate([[0.0], 0.5 + 0.01 * np.arange(200)])
+    x = np.sin(t)
+    value, slope = smooth_derivative(t, x, 0.03)
+    assert value[0] == pytest.approx(x[0]) and slope[0] == 0.0
+    alone, _ = smooth_derivative(t[1:], x[1:], 0.03)
+    np.testing.assert_allclose(value[1:], alone, atol=1e-12)
+    np.testing.assert_allclose(slope[50:150], np.cos(t[50:150]), atol=1e-3)

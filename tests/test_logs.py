@@ -6,6 +6,7 @@ import pytest
 import leadthrough as lt
 from leadthrough.errors import InputShapeError
 from leadthrough.experiments.real_logs import supervisor_verdict
+from leadthrough.friction.identification import IdentificationError
 from leadthrough.runtime.readers import LogError, LogWarning, detect_format
 from realdata import REALDATA, needs_realdata
 
@@ -151,3 +152,31 @@ def test_a_log_with_disagreeing_shapes_names_the_column(columns, named):
     arrays = {"t": np.arange(5.0), "q": np.zeros((5, 2)), "qd": np.zeros((5, 2))} | columns
     with pytest.raises(InputShapeError, match=f"^{named}: expected shape"):
         lt.JointLog(**arrays, source="run.csv")
+
+
+def test_a_ur_wide_csv_with_a_header_row_is_refused_naming_it(tmp_path):
+    """Columns named in a first line: not a UR controller's file, whatever its width.
+
+    Read as one before, its header was dropped as a corrupted row and its torque columns
+    were taken for motor currents (times K): a contact of −927 Nm for the whole run.
+    """
+    header = ",".join(["time"] + [f"{k}{j}" for k in ("q", "dq", "tau") for j in range(1, 7)])
+    path = _write(tmp_path / "mine.csv", _ur_rows(50, 19), [])
+    path.write_text(header + "\n" + path.read_text())
+    with pytest.raises(LogError, match=r"mine\.csv: its first line names columns \(time,q1"):
+        lt.read_log(path)
+
+
+def test_a_log_timed_in_milliseconds_is_refused(tmp_path):
+    """Samples 8 s apart (a UR log's 8 ms, in milliseconds): one line asking about its unit.
+
+    ``identify`` took such a log without a word (σ 6× too large), or crashed.
+    """
+    table = _ur_rows(50, 31)
+    table[:, 0] *= 1e3
+    with pytest.raises(LogError, match=r"ms\.csv: samples 8 s apart .*milliseconds"):
+        lt.read_log(_write(tmp_path / "ms.csv", table))
+    rows = _ur_rows(60, 19)
+    log = {"t": 1e3 * rows[:, 0], "q": rows[:, 1:7], "qd": rows[:, 7:13], "tau": rows[:, 13:19]}
+    with pytest.raises(IdentificationError, match="milliseconds"):
+        lt.identify_friction(log, lt.robots.ur10e())

@@ -70,8 +70,11 @@ class FrictionStudy:
                 self.samples.tau_friction[mine, joint])  # fmt: skip
 
     def raw_samples(self, joint: int) -> tuple[FloatArray, FloatArray]:
-        """Raw (q̇, τ) of the logs that excited ``joint``: velocity [rad/s], motor torque [Nm]."""
-        mine = [log for log in self.logs if _excited_joint(log) == joint]
+        """Raw (q̇, τ) of the logs that excited ``joint``: velocity [rad/s], motor torque [Nm].
+
+        Every log's, where no log excited it alone (a run that moved several joints).
+        """
+        mine = [log for log in self.logs if _excited_joint(log) == joint] or list(self.logs)
         return (np.concatenate([log_field(log, "qd")[:, joint] for log in mine]),
                 np.concatenate([log_field(log, "tau")[:, joint] for log in mine]))  # fmt: skip
 

@@ -16,12 +16,12 @@ from pathlib import Path
 
 import numpy as np
 
+from leadthrough.estimation.log_observer import measured_torque
 from leadthrough.experiments.real_dynamics import dynamics_table, ur10e_dynamics_study
 from leadthrough.experiments.real_friction import (
     JointFriction,
     friction_table,
     panda_friction,
-    quietly,
     ur10e_friction,
 )
 from leadthrough.friction.identification import (
@@ -32,6 +32,7 @@ from leadthrough.friction.identification import (
 from leadthrough.friction.model import PARAMETER_COLUMNS, FrictionModel
 from leadthrough.identification.dynamics import identify_dynamics
 from leadthrough.identification.prediction import prediction_error, rms
+from leadthrough.logs.log import JointLog
 from leadthrough.model.description import RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.model.robots.toml_format import save_robot
@@ -78,7 +79,7 @@ def write_logs_report(
 ) -> str:
     """Friction and dynamics of ``robot`` from ``logs``, judged on ``held_out`` logs."""
     out.mkdir(parents=True, exist_ok=True)
-    fitted = [quietly(read_log, path, robot) for path in logs]
+    fitted = [_users_log(path, robot) for path in logs]
     dynamics = Dynamics(robot)
     samples = friction_samples(fitted, dynamics)
     try:
@@ -104,7 +105,7 @@ def write_logs_report(
              *([missing, ""] if missing else []), "Dynamics fit:", "",
              "```", str(report), "```", "", "![friction](friction.png)", ""]  # fmt: skip
     for index, path in enumerate(held_out):
-        log = quietly(read_log, path, robot)
+        log = _users_log(path, robot)
         errors = {"nominal": prediction_error(log, robot),
                   "ours": prediction_error(log, identified, report.offset)}  # fmt: skip
         predicted = {name: log.tau - error for name, error in errors.items()}
@@ -118,6 +119,17 @@ def write_logs_report(
     text = "\n".join(lines)
     (out / "report.md").write_text(text + "\n", encoding="utf-8")
     return text
+
+
+def _users_log(path: Path, robot: RobotDescription) -> JointLog:
+    """A log of the user's robot, its torque for ``robot`` checked before any fit.
+
+    Its reader's warnings are shown (rows dropped as corrupted): it is not the public
+    data, whose known warnings the other reports silence.
+    """
+    log = read_log(path, robot)
+    measured_torque(log, robot)  # one line if there is none, or currents without K
+    return log
 
 
 def friction_values(friction: FrictionModel, joints: Sequence[int]) -> list[str]:

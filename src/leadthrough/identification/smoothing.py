@@ -17,6 +17,8 @@ from leadthrough.model.description import FloatArray
 
 #: Neighbours farther than this many bandwidths carry no weight.
 _REACH = 3.0
+#: Ridge on the local slope and curvature, relative to the window's weight [–].
+_RIDGE = 1e-6
 
 
 def smooth_derivative(
@@ -51,5 +53,12 @@ def smooth_derivative(
         sums += powers
         moments += powers[:, :3].T[:, :, None] * flat[index][None]
     normal = sums[:, [[0, 1, 2], [1, 2, 3], [2, 3, 4]]]  # (N, 3, 3) normal equations
+    # a sample with fewer than three neighbours in its window (rows dropped as corrupted
+    # around it, a dropout) cannot fix a quadratic: a ridge of 1e-6 of its weight on the
+    # slope and the curvature leaves it its value, with no slope when it stands alone
+    # (singular before), and moves a well-sampled fit by ~1e-6 of itself
+    ridge = _RIDGE * sums[:, 0]
+    normal[:, 1, 1] += ridge * bandwidth**2
+    normal[:, 2, 2] += ridge * bandwidth**4
     coefficients = np.linalg.solve(normal, moments.transpose(1, 0, 2))  # (N, 3, m)
     return coefficients[:, 0].reshape(x.shape), coefficients[:, 1].reshape(x.shape)

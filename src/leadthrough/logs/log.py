@@ -13,6 +13,11 @@ from leadthrough.errors import InputShapeError
 FloatArray = NDArray[np.float64]
 
 
+#: The longest median sample period a robot's log may have [s], 10 Hz (the public UR10e
+#: and Panda logs sample at 100 Hz and 1 kHz): a log timed in milliseconds reads 4–10 s.
+MAX_PERIOD = 0.1
+
+
 @dataclass(frozen=True, eq=False)
 class JointLog:
     """A run of N samples of an n-joint arm, in the arm's own time base.

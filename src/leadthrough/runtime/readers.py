@@ -31,7 +31,7 @@ from typing import Literal
 import numpy as np
 
 from leadthrough.errors import LeadthroughError
-from leadthrough.logs.log import FloatArray, JointLog
+from leadthrough.logs.log import MAX_PERIOD, FloatArray, JointLog
 from leadthrough.model.description import RobotDescription
 
 Format = Literal["ur_csv", "panda_txt", "recording", "excitation"]
@@ -67,7 +67,9 @@ def read_log(
             detected when None.
 
     Raises:
-        LogError: No such file, an unknown format, or a file that is mostly garbage.
+        LogError: No such file, an unknown format (a UR-wide CSV with a header row
+            included), a file that is mostly garbage, or samples further apart than
+            :data:`MAX_PERIOD` (time not in seconds).
     """
     path = Path(path)
     if not path.exists():
@@ -77,7 +79,7 @@ def read_log(
                "recording": _read_recording, "excitation": _read_excitation}  # fmt: skip
     if kind not in readers:
         raise LogError(f"{path}: unknown log format {kind!r} (one of {', '.join(readers)})")
-    log = readers[kind](path)
+    log = _plausible_period(readers[kind](path))
     if robot is not None:
         log = _with_robot(log, robot)
     return log
@@ -99,11 +101,36 @@ def detect_format(path: Path) -> Format:
     if first.startswith("run,") or first.startswith("t,"):
         return "excitation"
     if first.count(",") + 1 in _UR_WIDTHS:
+        if not _numeric(first):  # a header naming the columns: not a UR controller's file
+            raise LogError(f"{path}: its first line names columns ({first.strip()[:40]}…), "
+                           "and a UR CSV has no header: write your own log as an excitation "
+                           "log, its header t,q1..,qd1..,tau1.. "
+                           "(leadthrough identify --help)")  # fmt: skip
         return "ur_csv"
     widths = ", ".join(str(w) for w in sorted(_UR_WIDTHS))
     raise LogError(f"{path}: unknown log format: its first line is neither a UR CSV row "
                    f"({widths} columns) nor an excitation log's header (run,t,… or t,…), and "
                    "it is no Panda text log, .mcap recording or .npz")  # fmt: skip
+
+
+def _numeric(line: str) -> bool:
+    """Whether any value of a CSV line is a number (a corrupted row has some)."""
+    for value in line.split(","):
+        try:
+            float(value)
+        except ValueError:
+            continue
+        return True
+    return False
+
+
+def _plausible_period(log: JointLog) -> JointLog:
+    """``log``, unless its median sample period says its time is not in seconds."""
+    if log.n_samples > 2 and log.median_period > MAX_PERIOD:
+        raise LogError(f"{log.source}: samples {log.median_period:.4g} s apart (median): is "
+                       f"its time in milliseconds? A robot's log samples every "
+                       f"{MAX_PERIOD:g} s or faster")  # fmt: skip
+    return log
 
 
 def _with_robot(log: JointLog, robot: RobotDescription) -> JointLog:
