@@ -181,3 +181,18 @@ def test_a_bad_log_is_named_by_its_file(yumi):
                         source="runs/short.csv")  # fmt: skip
     with pytest.raises(IdentificationError, match=r"runs/short\.csv: too short \(12 samples"):
         identify_friction([short], lt.Dynamics(yumi))
+
+
+def test_an_excitation_file_is_named_in_the_errors_with_its_joint_count(short_logs, tmp_path):
+    """Logs loaded from a file carry it: a NaN or another arm's joint count names it.
+
+    They were "log 0", and another joint count "'q' has shape (…, 6), expected (…, 7)".
+    """
+    log = short_logs[0]
+    bad = {"t": log.t, "q": log.q, "qd": np.where(np.arange(len(log.t))[:, None] == 3, np.nan,
+                                                    log.qd), "tau": log.tau}  # fmt: skip
+    (loaded,) = load_logs(save_logs([bad], tmp_path / "mine.csv"))
+    with pytest.raises(IdentificationError, match=r"mine\.csv: 'qd' is not finite at sample 3"):
+        identify_friction([loaded], lt.Dynamics(lt.robots.yumi()))
+    with pytest.raises(IdentificationError, match=r"mine\.csv: 7 joints, but ur10e has 6"):
+        identify_friction([loaded], lt.Dynamics(lt.robots.ur10e()))

@@ -243,8 +243,12 @@ def _is_log(value: Any) -> bool:
 
 
 def log_name(log: Any, index: int) -> str:
-    """How an error names a log: its file (``JointLog.source``), else "log <index>" (0-based)."""
-    source = None if isinstance(log, Mapping) else getattr(log, "source", None)
+    """How an error names a log: its file, else "log <index>" (0-based).
+
+    The file is ``JointLog.source``, or a mapping's ``"source"`` (as
+    :func:`~leadthrough.friction.logs.load_logs` gives it).
+    """
+    source = log.get("source") if isinstance(log, Mapping) else getattr(log, "source", None)
     return str(source) if source else f"log {index}"
 
 
@@ -266,6 +270,9 @@ def _log_samples(
     if t.ndim != 1 or len(t) < 50:
         raise IdentificationError(f"{label}: too short ({len(t)} samples, need ≥ 50)")
     for name, array in (("q", q), ("qd", qd), ("tau", tau)):
+        if array.ndim == 2 and len(array) == len(t) and array.shape[1] != n:
+            raise IdentificationError(f"{label}: {array.shape[1]} joints, but "
+                                      f"{dynamics.robot.name} has {n}")  # fmt: skip
         if array.shape != (len(t), n):
             raise IdentificationError(f"{label}: '{name}' has shape {array.shape}, "
                                       f"expected ({len(t)}, {n}) like 't'")  # fmt: skip

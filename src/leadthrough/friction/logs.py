@@ -39,8 +39,12 @@ def save_logs(logs: Sequence, path: str | Path) -> Path:
     return path
 
 
-def load_logs(path: str | Path) -> list[dict[str, np.ndarray]]:
-    """Read logs written by :func:`save_logs` (or by hand in the same layout), one per run."""
+def load_logs(path: str | Path) -> list[dict[str, Any]]:
+    """Read logs written by :func:`save_logs` (or by hand in the same layout), one per run.
+
+    Each a mapping of its arrays ``t``, ``q``, ``qd``, ``tau`` and its ``source`` (the
+    file, and the run where it holds several), which errors name.
+    """
     path = Path(path)
     if not path.is_file():
         raise LogFileError(f"{path}: no such file")
@@ -49,8 +53,10 @@ def load_logs(path: str | Path) -> list[dict[str, np.ndarray]]:
     except (OSError, ValueError, KeyError) as error:
         raise LogFileError(f"{path}: cannot read logs ({error})") from None
     runs = arrays["run"]
-    return [{name: arrays[name][runs == run] for name in ("t", "q", "qd", "tau")}
-            for run in np.unique(runs)]  # fmt: skip
+    numbers = np.unique(runs)
+    return [{"source": str(path) if len(numbers) == 1 else f"{path} (run {run:g})",
+             **{name: arrays[name][runs == run] for name in ("t", "q", "qd", "tau")}}
+            for run in numbers]  # fmt: skip
 
 
 def _get(log: object, name: str) -> np.ndarray:
