@@ -338,9 +338,9 @@ def test_a_reset_forgets_the_pose_it_held():
 @pytest.mark.parametrize(
     ("stamp", "reason"),
     [
-        (np.nan, "time stamp nan is not finite"),
-        (None, "time stamp None is not a number"),
-        ("0.2", "time stamp '0.2' is not a number"),
+        (np.nan, "time stamp nan is not a finite number"),
+        (None, "time stamp None is not a finite number"),
+        ("0.2", "time stamp '0.2' is not a finite number"),
         (1.2, r"time stamp jumped 1 s, from 0.200000 to 1.200000 s \(more than max_time_gap"),
     ],
     ids=["nan", "none", "string", "jump"],

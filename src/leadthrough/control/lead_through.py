@@ -60,6 +60,7 @@ from leadthrough.logs.sample import JointState, enabling_state, joint_state
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.model.snapshot import ModelSnapshot
+from leadthrough.safety.checks import seconds
 from leadthrough.safety.supervisor import SafetySupervisor, SupervisorState
 from leadthrough.validation import real
 
@@ -464,11 +465,8 @@ class LeadThrough:
         if not isinstance(state, JointState):
             self._own_clock += self.dt
         sample = joint_state(state, qd, tau, self._own_clock)
-        try:
-            stamp = float(sample.t)
-        except (TypeError, ValueError):
-            stamp = math.nan
-        if math.isfinite(stamp) and not isinstance(sample.t, str | bytes):
+        stamp = seconds(sample.t)
+        if stamp is not None:
             self._t = stamp
         try:
             self._enabling = enabling_state(sample.enabling)

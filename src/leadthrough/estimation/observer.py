@@ -354,7 +354,7 @@ class MomentumObserver:
         tau = self._input(tau)
         if model is None:  # a caller with its own snapshot has checked its sample
             model = self.dynamics.snapshot(q, qd)
-            _require_finite(q, qd)
+            _require_finite(("q", q), ("qd", qd))
         if friction_mean is not None:
             friction_mean = np.ascontiguousarray(np.broadcast_to(friction_mean, qd.shape),
                                                  dtype=float)  # fmt: skip
@@ -440,9 +440,7 @@ class MomentumObserver:
             if tau.ndim:
                 raise InputShapeError("tau", self._p.shape, tau.shape)
             tau = np.full(self._p.shape, float(tau))
-        if not math.isfinite(tau.sum()):  # a NaN or Inf anywhere makes the sum one
-            bad = np.flatnonzero(~np.isfinite(tau)).tolist()
-            raise InputValueError("tau", f"not finite (NaN or Inf) on joints {bad}")
+        _require_finite(("tau", tau))
         return tau
 
     def _gains(
@@ -494,10 +492,10 @@ class MomentumObserver:
         return {key: np.array(values) for key, values in levels.items()} | {"threshold": threshold}
 
 
-def _require_finite(q: FloatArray, qd: FloatArray) -> None:
-    """Raise :class:`InputValueError` if a position or velocity is NaN or Inf."""
-    for name, value in (("q", q), ("qd", qd)):
-        if not np.isfinite(value).all():
+def _require_finite(*inputs: tuple[str, FloatArray]) -> None:
+    """Raise :class:`InputValueError` naming the first (name, array) with a NaN or Inf."""
+    for name, value in inputs:
+        if not math.isfinite(value.sum()):  # a NaN or Inf anywhere makes the sum one
             bad = np.flatnonzero(~np.isfinite(value)).tolist()
             raise InputValueError(name, f"not finite (NaN or Inf) on joints {bad}")
 

@@ -158,7 +158,7 @@ def identify_dynamics(
                             prior_std)  # fmt: skip
         predicted = rows @ x
         if gain_std > 0.0:
-            gain, gain_sd = _gains(predicted, measured, noise[joint], joint, n, gain_std)
+            gain = _gains(predicted, measured, noise[joint], joint, n, gain_std)
         noise = _per_joint_rms(measured - predicted / gain[joint], joint, n)
     if gain_std > 0.0:
         gain_sd = _gain_std(rows, measured, noise[joint], joint, x, gain, (prior_std, gain_std))
@@ -257,20 +257,20 @@ def _gains(
     joint: np.ndarray,
     n: int,
     prior_std: float,
-) -> tuple[FloatArray, FloatArray]:
-    """Drive-gain scales g minimising Σ (τ − p / g)² / σ² + (1/g − 1)² / σ_g², and their std.
+) -> FloatArray:
+    """Drive-gain scales g minimising Σ (τ − p / g)² / σ² + (1/g − 1)² / σ_g², π held.
 
     Linear in u = 1/g: the measured torque τ is the model's torque p over g. The overall
-    scale of (π, g) is flat in the data; the priors on both hold it.
+    scale of (π, g) is flat in the data; the priors on both hold it (their std:
+    :func:`_gain_std`).
     """
-    u, u_std = np.ones(n), np.zeros(n)
+    u = np.ones(n)
     for j in range(n):
         mine = joint == j
         p, tau, w = predicted[mine], measured[mine], 1.0 / noise[mine] ** 2
         information = np.sum(w * p * p) + 1.0 / prior_std**2
         u[j] = (np.sum(w * p * tau) + 1.0 / prior_std**2) / information
-        u_std[j] = 1.0 / np.sqrt(information)
-    return 1.0 / u, u_std / u**2
+    return 1.0 / u
 
 
 def _gain_std(
@@ -288,7 +288,7 @@ def _gain_std(
     however the currents are scaled. But ``τ = Y π / g_j`` is unchanged by (s π, s g):
     the data do not see the overall scale of π and g, which only their priors hold.
     The std of the joint posterior, linearised at the fit, says so: on the UR10e's ten
-    excitation runs 1–13 % instead of 0.1 %.
+    excitation runs 5–13 % instead of 0.1 %.
     """
     from scipy import linalg  # at call time: keeps `import leadthrough` fast
 

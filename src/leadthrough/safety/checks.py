@@ -58,6 +58,17 @@ def within_bounds(values: FloatArray, low: FloatArray, high: FloatArray, offset:
     return True
 
 
+def seconds(t: object) -> float | None:
+    """A time stamp as a float [s] if it is a finite number (not a string), else None."""
+    if isinstance(t, str | bytes):
+        return None
+    try:
+        value = float(t)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return None
+    return value if math.isfinite(value) else None
+
+
 def time_problem(t: object, previous: float | None, max_gap: float | None) -> str | None:
     """Why a sample's time stamp cannot be used, or None.
 
@@ -68,14 +79,9 @@ def time_problem(t: object, previous: float | None, max_gap: float | None) -> st
             (``SafetyParameters.max_time_gap``; None: any). A stamp that repeats or goes
             back is taken as it is (a driver's clock may be coarse).
     """
-    try:
-        if isinstance(t, str | bytes):
-            raise TypeError("a string")
-        value = float(t)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        return f"time stamp {t!r} is not a number"
-    if not math.isfinite(value):
-        return f"time stamp {value} is not finite"
+    value = seconds(t)
+    if value is None:
+        return f"time stamp {t!r} is not a finite number"
     if previous is not None and max_gap is not None and value - previous > max_gap:
         return (f"time stamp jumped {value - previous:.4g} s, from {previous:.6f} to "
                 f"{value:.6f} s (more than max_time_gap {max_gap:g} s): samples lost, or a "

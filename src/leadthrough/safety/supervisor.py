@@ -27,7 +27,6 @@ episode) in :mod:`.events`; this module holds the state machine.
 
 from __future__ import annotations
 
-import math
 from enum import StrEnum
 
 import numpy as np
@@ -46,6 +45,7 @@ from leadthrough.safety.checks import (
     floats,
     in_range,
     sample_reason,
+    seconds,
     time_problem,
     trusted_velocity,
 )
@@ -381,11 +381,8 @@ class SafetySupervisor:
         The safe stop's damped phase counts from the fault's time: a NaN there left it
         undamped for good (every comparison False), an Inf damped for good.
         """
-        try:
-            value = float(t)  # type: ignore[arg-type]
-        except (TypeError, ValueError):
-            return
-        if math.isfinite(value) and not isinstance(t, str | bytes):
+        value = seconds(t)
+        if value is not None:
             self._t = value
 
     def _fault(self, reason: str) -> None:
