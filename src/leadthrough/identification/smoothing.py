@@ -10,6 +10,8 @@ of the curvature bias where the window is lopsided (gaps, the ends of the run).
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -61,4 +63,5 @@ def smooth_derivative(
     normal[:, 1, 1] += ridge * bandwidth**2
     normal[:, 2, 2] += ridge * bandwidth**4
     coefficients = np.linalg.solve(normal, moments.transpose(1, 0, 2))  # (N, 3, m)
-    return coefficients[:, 0].reshape(x.shape), coefficients[:, 1].reshape(x.shape)
+    value, rate = coefficients[:, 0].reshape(x.shape), coefficients[:, 1].reshape(x.shape)
+    return cast(FloatArray, value), cast(FloatArray, rate)
