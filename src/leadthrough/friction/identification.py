@@ -42,7 +42,7 @@ from leadthrough.errors import LeadthroughError
 from leadthrough.filters import low_pass_signal, pole
 from leadthrough.friction.along_travel import level_along_travel, level_error
 from leadthrough.friction.model import FrictionModel, level_stays_positive, sigmoid
-from leadthrough.logs.log import MAX_PERIOD
+from leadthrough.logs.log import period_problem
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 
@@ -283,11 +283,11 @@ def _log_samples(
             raise IdentificationError(f"{label}: '{name}' is not finite at {where}")
     if np.any(np.diff(t) <= 0):
         raise IdentificationError(f"{label}: 't' must increase strictly")
-    if np.median(np.diff(t)) > MAX_PERIOD:
-        raise IdentificationError(f"{label}: samples {np.median(np.diff(t)):.4g} s apart "
-                                  "(median): is its time in milliseconds? A robot's log "
-                                  f"samples every {MAX_PERIOD:g} s or faster")  # fmt: skip
-    smoothing = pole(float(np.median(np.diff(t))))  # the thesis' 7.8 ms at the log's rate
+    period = float(np.median(np.diff(t)))
+    problem = period_problem(period)
+    if problem is not None:
+        raise IdentificationError(f"{label}: {problem}")
+    smoothing = pole(period)  # the thesis' 7.8 ms at the log's rate
     q_f, qd_f, tau_f = (low_pass_signal(x, smoothing) for x in (q, qd, tau))
     qdd = np.gradient(qd_f, t, axis=0)
     rigid = np.array([dynamics.inverse_dynamics(*row) for row in zip(q_f, qd_f, qdd, strict=True)])

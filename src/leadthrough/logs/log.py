@@ -18,6 +18,14 @@ FloatArray = NDArray[np.float64]
 MAX_PERIOD = 0.1
 
 
+def period_problem(period: float) -> str | None:
+    """Why a log whose samples are ``period`` s apart (median) is no robot's, else None."""
+    if period > MAX_PERIOD:
+        return (f"samples {period:.4g} s apart (median): is its time in milliseconds? "
+                f"A robot's log samples every {MAX_PERIOD:g} s or faster")  # fmt: skip
+    return None
+
+
 @dataclass(frozen=True, eq=False)
 class JointLog:
     """A run of N samples of an n-joint arm, in the arm's own time base.

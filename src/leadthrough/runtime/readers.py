@@ -31,7 +31,7 @@ from typing import Literal
 import numpy as np
 
 from leadthrough.errors import LeadthroughError
-from leadthrough.logs.log import MAX_PERIOD, FloatArray, JointLog
+from leadthrough.logs.log import FloatArray, JointLog, period_problem
 from leadthrough.model.description import RobotDescription
 
 Format = Literal["ur_csv", "panda_txt", "recording", "excitation"]
@@ -69,7 +69,7 @@ def read_log(
     Raises:
         LogError: No such file, an unknown format (a UR-wide CSV with a header row
             included), a file that is mostly garbage, or samples further apart than
-            :data:`MAX_PERIOD` (time not in seconds).
+            :data:`~leadthrough.logs.log.MAX_PERIOD` (time not in seconds).
     """
     path = Path(path)
     if not path.exists():
@@ -126,10 +126,9 @@ def _numeric(line: str) -> bool:
 
 def _plausible_period(log: JointLog) -> JointLog:
     """``log``, unless its median sample period says its time is not in seconds."""
-    if log.n_samples > 2 and log.median_period > MAX_PERIOD:
-        raise LogError(f"{log.source}: samples {log.median_period:.4g} s apart (median): is "
-                       f"its time in milliseconds? A robot's log samples every "
-                       f"{MAX_PERIOD:g} s or faster")  # fmt: skip
+    problem = period_problem(log.median_period) if log.n_samples > 2 else None
+    if problem is not None:
+        raise LogError(f"{log.source}: {problem}")
     return log
 
 
