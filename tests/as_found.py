@@ -9,6 +9,7 @@ from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.calibration import CalibrationParameters, CalibrationRun
 from leadthrough.control.dither import DitherParameters
 from leadthrough.control.feedforward import PassiveFeedForward
+from leadthrough.control.interface_delay import InterfaceDelay
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.friction.compensation import CoulombCompensationParameters
 
@@ -184,3 +185,8 @@ def diagonal_damping(monkeypatch) -> None:
     monkeypatch.setattr(active_law, "virtual_damping",
                         lambda mass, *args: np.diag(np.diag(shaped(mass, *args))))  # fmt: skip
     monkeypatch.setattr(dither, "ACTIVE_AMPLITUDE", 0.3)
+
+
+def told_measurement_delay(monkeypatch) -> None:
+    """Every controller keeps the ``measurement_delay`` it is told, as before it read it."""
+    monkeypatch.setattr(InterfaceDelay, "update", lambda estimate, tau_measured: estimate.delay)

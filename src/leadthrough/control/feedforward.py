@@ -44,32 +44,36 @@ class DelayLine:
 
     One entry per period, pushed with :meth:`push`; :attr:`measured` is the entry pushed
     ``delay`` periods before the current one (zeros at the start). A ring buffer
-    preallocated once: a period copies its entry in and the measured one out.
+    preallocated once: a period copies its entry in and the measured one out. It keeps
+    ``capacity`` entries, so that ``delay`` may be changed later up to that
+    (:class:`~leadthrough.control.interface_delay.InterfaceDelay` reads it from the data).
 
     Args:
         shape: Shape of one entry, e.g. (2, n) for a command and its dither [Nm].
         delay: Periods from sending to measuring (≥ 1, see :func:`measurement_delay`).
+        capacity: Entries kept (default ``delay``; at least ``delay``).
     """
 
-    def __init__(self, shape: tuple[int, ...], delay: int) -> None:
+    def __init__(self, shape: tuple[int, ...], delay: int, capacity: int | None = None) -> None:
         self.delay = measurement_delay(delay)
-        self._ring = np.zeros((self.delay, *shape))
+        self.capacity = max(self.delay, capacity or self.delay)
+        self._ring = np.zeros((self.capacity, *shape))
         self.reset()
 
     def reset(self) -> None:
         """Nothing sent yet: zeros."""
         self._ring[...] = 0.0
-        self._oldest = 0  # the slot pushed ``delay`` periods ago, overwritten next
+        self._next = 0  # the slot written next: the one pushed ``capacity`` periods ago
 
     @property
     def measured(self) -> FloatArray:
         """The entry sent ``delay`` periods ago (a fresh copy)."""
-        return self._ring[self._oldest].copy()
+        return self._ring[(self._next - self.delay) % self.capacity].copy()
 
     def push(self, entry: ArrayLike) -> None:
         """Record what is sent this period."""
-        self._ring[self._oldest] = entry
-        self._oldest = (self._oldest + 1) % self.delay
+        self._ring[self._next] = entry
+        self._next = (self._next + 1) % self.capacity
 
 
 class GravityCompensation:

@@ -48,6 +48,7 @@ from leadthrough.control.calibration import (
 )
 from leadthrough.control.constraints import VirtualConstraint, constraint_torque
 from leadthrough.control.feedforward import DelayLine, FeedForwardTorques, PassiveFeedForward
+from leadthrough.control.interface_delay import InterfaceDelay
 from leadthrough.control.parameters import LeadThroughParameters, Mode
 from leadthrough.control.warm_up import exercise
 from leadthrough.errors import ParameterError, failure
@@ -345,7 +346,11 @@ class LeadThrough:
         self._no_dither = np.zeros(n)  # the dither sent while the device is released [Nm]
         self._no_gravity_reference = np.zeros(n)  # G_cal without a calibration [Nm]
         self._ripple_std = np.zeros(n)  # the drives' ripple on the last motor torque [Nm]
-        self._sent = DelayLine((2, n), p.measurement_delay)  # (command, its dither) [Nm]
+        #: which command the measured torque holds, read from the data (starts at the
+        #: parameters' ``measurement_delay``)
+        self.interface_delay = InterfaceDelay(n, p.measurement_delay, self.dt)
+        self._sent = DelayLine((2, n), p.measurement_delay,  # (command, its dither) [Nm]
+                               self.interface_delay.longest)  # fmt: skip
         self._own_clock = 0.0  # [s], for the positional form of step, which brings no time
         self._t = float("nan")
         self._enabling: bool | None = None  # the sample's enabling device (JointState)
@@ -477,17 +482,27 @@ class LeadThrough:
 
     def _send(self, command: FloatArray, dither: FloatArray) -> FloatArray:
         self._sent.push((command, dither))
+        self.interface_delay.record(command)
         return command
 
     def _measured(self, tau_measured: FloatArray | None) -> tuple[FloatArray, FloatArray]:
         """The motor torque applied over the last period [Nm] and the dither it holds.
 
         A measured torque less the offset the calibration found in the measurement
-        (:attr:`torque_offset`); the command sent then, without one.
+        (:attr:`torque_offset`); the command sent then, without one. Which command a
+        measured torque holds is read from the data (:attr:`interface_delay`, logged as a
+        ``measurement_delay`` event when it changes); without a measured torque it is the
+        one ``parameters.measurement_delay`` says.
         """
-        sent = self._sent.measured  # rows: the command, its dither
         if tau_measured is None:
+            sent = self._sent.measured  # rows: the command, its dither
             return sent[0], sent[1]
+        delay = self.interface_delay.update(tau_measured)
+        if delay != self._sent.delay:
+            self.supervisor.log("measurement_delay", f"the measured torque holds the command "
+                                f"sent {delay} periods before, not {self._sent.delay}")  # fmt: skip
+            self._sent.delay = delay
+        sent = self._sent.measured
         if self._torque_offset is None:
             return tau_measured, sent[1]
         return tau_measured - self._torque_offset, sent[1]
@@ -507,7 +522,7 @@ class LeadThrough:
         run, elapsed = self._calibration_run, t - self._calibration_start
         applied, _ = self._measured(tau_measured)
         # what the drive measured against what it was told (once a command has reached it)
-        told = elapsed >= self.parameters.measurement_delay * self.dt
+        told = elapsed >= self._sent.delay * self.dt
         discrepancy = None
         if tau_measured is not None and told:
             discrepancy = tau_measured - self._sent.measured[0]

@@ -157,7 +157,9 @@ class LeadThroughParameters:
             supervisor stays the last word).
         measurement_delay: Control steps from sending a command to measuring it, an
             integer ≥ 1 [–] (2 on the twin and the thesis' interface: applied one period
-            late, measured over the period after).
+            late, measured over the period after). Where the robot measures its motor
+            torque, the delay its measurements show replaces it
+            (:mod:`~leadthrough.control.interface_delay`, up to 8 periods).
         rest_velocity: A joint slower than this is at rest [rad/s]: the one definition
             of "at rest" (the dither comes on after ``dither.rest_time`` at rest, the
             friction compensation's dead-band widens to it while dithering, and the
