@@ -114,19 +114,18 @@ def _score(
     if period < history:
         return delay
     old, older = (period - longest) % history, (period - longest - 1) % history
-    squares = np.zeros(longest)
-    for candidate in range(1, longest + 1):
-        row = (period + candidate) % longest  # Δτ_m of period − longest + candidate
+    for row in range(longest):  # a change not to use (NaN) would poison every score
+        for j in range(n):
+            if not math.isfinite(changes[row, j] - commands[old, j] + commands[older, j]):
+                return delay
+    best = 0
+    for candidate in range(longest):  # candidate + 1 periods of delay
+        row = (period + candidate + 1) % longest  # Δτ_m of period − longest + candidate + 1
         total = 0.0
         for j in range(n):
             error = changes[row, j] - (commands[old, j] - commands[older, j])
             total += error * error
-        if not math.isfinite(total):
-            return delay
-        squares[candidate - 1] = total
-    best = 0
-    for candidate in range(longest):
-        scores[candidate] += rate * (squares[candidate] - scores[candidate])
+        scores[candidate] += rate * (total - scores[candidate])
         if scores[candidate] < scores[best]:
             best = candidate
     if period - history + 1 >= SCORED and scores[best] < EVIDENCE * scores[delay - 1]:
