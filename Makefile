@@ -37,6 +37,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/guiding_quality.py --seeds 9-12 --plants position_amplitude=0.25 friction_scale=0.7,1.3
 	$(BIN)/python benchmarks/guiding_quality.py --identified
 	$(BIN)/python benchmarks/guiding_quality.py --dt 0.008
+	$(BIN)/python benchmarks/guiding_quality.py --cases contact
 	$(BIN)/python benchmarks/margin_tradeoff.py --out build/margin_runs
 	$(BIN)/python benchmarks/replay_quality.py
 	$(BIN)/python benchmarks/replay_quality.py --dt 0.008

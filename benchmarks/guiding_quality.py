@@ -14,8 +14,14 @@ friction, or with each plant's friction identified first (``--identified``; see
 - the observer (active run): RMS error over the peak operator torque (≤ 10 %), ±2 std
   coverage of moving samples (90–99 %), median std over the peak (≤ 30 %).
 
+``--cases contact``: the hand presses the tool onto a stiff table instead (one case per
+plant and hand; the thesis' "stable also in contact with stiff surfaces"): the vibration,
+the releases (let go while pressing) and the observer against the whole external torque,
+the table's included, are what it judges; the effort is the pressing force's ratio.
+
 Usage:
-    python benchmarks/guiding_quality.py [--cases quick] [--save out.json] [--compare old.json]
+    python benchmarks/guiding_quality.py [--cases quick|contact] [--save out.json]
+        [--compare old.json]
         [--factory module:function]   (the active controller: function(robot, mode))
         [--robot NAME] [--seeds 5-8]  (another arm; plants not developed on)
         [--robot FILE --tip LINK --drive-data FILE]  (an arm of your own: a URDF or TOML)
@@ -161,7 +167,7 @@ def plant_ranges(settings: list[str] | None) -> PlantRanges:
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--cases", choices=("full", "quick"), default="full")
+    parser.add_argument("--cases", choices=("full", "quick", "contact"), default="full")
     add_robot_arguments(parser)  # --robot, --tip, --drive-data, as the command line's
     parser.add_argument(
         "--uncalibrated",

@@ -40,6 +40,7 @@ from leadthrough.model.dynamics import Dynamics
 from leadthrough.runtime.excitation import friction_experiment
 from leadthrough.runtime.interface import JointState
 from leadthrough.runtime.loop import stepper
+from leadthrough.twin.mjcf import TableSurface
 from leadthrough.twin.operator import During, Hand, HandParameters
 from leadthrough.twin.paths import Circle, Line, Path
 from leadthrough.twin.plants import PlantRanges, sample_plant
@@ -64,6 +65,12 @@ LINES = {
     "down-in": (-0.2 / np.sqrt(2.0), 0.0, -0.2 / np.sqrt(2.0)),
 }
 PATH_NAMES = (*LINES, "circle")
+#: The contact case's path: the hand presses the tool straight down onto a stiff table
+#: (:data:`TABLE_GAP` below the tool's tip at home) by :data:`PRESS_DEPTH` over a line's
+#: duration, 1.5 cm into it: 4.5 N with the relaxed hand, 45 N with the stiff (its limit 60).
+PRESS = "press"
+PRESS_DEPTH = 0.025  # [m]
+TABLE_GAP = 0.01  # [m]
 LINE_DURATION = 4.0  # [s]
 CIRCLE_DURATION = 6.0  # [s]
 HOLD = 2.0  # [s] of holding the end pose after the path
@@ -118,8 +125,9 @@ class CaseResult:
             vibration above 4 Hz aside (:func:`release_figures`) [s].
         drift: Largest joint motion over the :data:`REST` s from 0.5 s after the release [rad].
         max_joint_speed: Largest true joint speed of both runs (a runaway check) [rad/s].
-        observer_rms: RMS error of τ̂_ext vs the operator torque while moving, over the
-            joint's peak operator torque, mean over joints [–] (NaN if not readable).
+        observer_rms: RMS error of τ̂_ext vs the true external torque (the operator's, and
+            a table's in the contact cases) while moving, over the joint's peak of it, mean
+            over joints [–] (NaN if not readable).
         observer_rms_moving: The RMS error relative to each joint's peak, pooled over the
             samples where a joint itself moves [–]: what the observer can see (where a
             joint stands still, stiction may hold any push below breakaway unseen).
@@ -163,10 +171,13 @@ def cases(
     hands: Sequence[str] = BENCHMARK_HANDS,
     ranges: PlantRanges | None = None,
 ) -> list[Case]:
-    """The benchmark's cases: ``"full"`` (14 per seed and physics) or ``"quick"`` (4).
+    """The benchmark's cases: ``"full"`` (14 per seed and physics), ``"quick"`` or ``"contact"``.
+
+    ``"contact"``: the tool pressed onto a stiff table (:data:`PRESS`), one case per seed,
+    physics and hand, released while it presses.
 
     Args:
-        kind: ``"full"`` or ``"quick"``.
+        kind: ``"full"``, ``"quick"`` or ``"contact"``.
         seeds: Plant seeds of the full set (default the development seeds, 56 cases).
         hands: Hands of the full set's lines (:data:`HANDS`); the circle takes the first.
         ranges: The plant family of every case (default :class:`PlantRanges`).
@@ -179,6 +190,9 @@ def cases(
     full = []
     for physics in ("dry", "lugre"):
         for seed in seeds:
+            if kind == "contact":
+                full += [Case(physics, seed, hand, PRESS, r) for hand in hands]
+                continue
             full += [Case(physics, seed, hand, path, r) for hand in hands for path in LINES]
             full.append(Case(physics, seed, hands[0], "circle", r))
     return full
@@ -187,6 +201,8 @@ def cases(
 def case_path(robot: RobotDescription, name: str, start: FloatArray | None = None) -> Path:
     """The hand's path ``name`` from ``start`` [m, world] (default: the flange at home)."""
     start = Dynamics(robot).pose(robot.home())[:3, 3] if start is None else start
+    if name == PRESS:
+        return Line(start, start - np.array([0.0, 0.0, PRESS_DEPTH]), duration=LINE_DURATION)
     if name == "circle":
         return Circle(start + np.array([0.0, 0.08, 0.0]), 0.08, (0.0, 0.0, 1.0),
                       (0.0, -1.0, 0.0), duration=CIRCLE_DURATION)  # fmt: skip
@@ -308,6 +324,9 @@ def _run(
         recorder = _Recorder(factory(robot, mode))
     grab = float(getattr(recorder.controller, "calibration_time", CalibrationParameters().duration))
     config = replace(plant.config, control_dt=recorder.dt or plant.config.control_dt)
+    if case.path == PRESS:  # a table under the tool (which points down at home)
+        home = Dynamics(robot).pose(robot.home())[:3, 3]
+        config = replace(config, table=TableSurface.below_tool(home, TABLE_GAP))
     twin = DigitalTwin(robot, config)
     observe_truth = getattr(recorder.controller, "observe_truth", None)
     if observe_truth is not None:  # an oracle (diagnosis): reads the twin's truth
@@ -547,7 +566,7 @@ def _observer_figures(
     below 10 % of the largest joint's are left out (their relative figures divide by
     almost nothing).
     """
-    truth = sim.tau_operator[moving]
+    truth = sim.tau_ext[moving]  # the operator's torque, and a contact's where there is one
     estimate = np.array(recorder.estimate)[moving]
     std = np.array(recorder.std)[moving]
     if not np.all(np.isfinite(estimate)):
@@ -648,7 +667,7 @@ def evaluate(
     """Every case of ``cases(kind)``: default passive against the active controller.
 
     Args:
-        kind: ``"quick"`` (4 cases, < 1 min) or ``"full"``.
+        kind: ``"quick"`` (4 cases, < 1 min), ``"full"`` or ``"contact"`` (:func:`cases`).
         controller_factory: Builds the active controller, ``factory(robot, "active")``;
             default :func:`default_factory`. Passive is always the default passive mode.
         robot: The nominal description (default the YuMi).

@@ -24,6 +24,15 @@ from leadthrough.model.description import FloatArray, RobotDescription
 FLANGE_SITE = "flange"
 TOOL_GEOM = "tool_tip"
 TABLE_GEOM = "table"
+#: Radius of the links' visual capsules [m] (the tool's capsule has half of it).
+LINK_RADIUS = 0.03
+#: Length of the tool's capsule along the flange's z axis [m], its rounded end aside.
+TOOL_LENGTH = 0.06
+
+
+def tool_tip_depth(link_radius: float = LINK_RADIUS) -> float:
+    """How far along the flange's z axis the tool's tip reaches [m]: capsule and rounded end."""
+    return TOOL_LENGTH + 0.5 * link_radius
 
 
 @dataclass(frozen=True)
@@ -40,6 +49,11 @@ class TableSurface:
     height: float
     stiffness_time_constant: float = 0.002
     friction: float = 0.3
+
+    @classmethod
+    def below_tool(cls, flange: FloatArray, gap: float) -> TableSurface:
+        """A table ``gap`` [m] below the tip of a tool pointing down from ``flange`` [m, world]."""
+        return cls(height=float(flange[2]) - tool_tip_depth() - gap)
 
 
 @dataclass(frozen=True)
@@ -84,7 +98,7 @@ def mjcf_from_description(
     physics_dt: float = 0.0005,
     table: TableSurface | None = None,
     payload: Payload | None = None,
-    link_radius: float = 0.03,
+    link_radius: float = LINK_RADIUS,
 ) -> str:
     """MJCF text of ``robot`` for MuJoCo.
 
@@ -163,10 +177,10 @@ def _link_body(
 def _tool(
     body: ElementTree.Element, flange: FloatArray, radius: float, payload: Payload | None
 ) -> None:
-    """Flange site, collidable tool tip 6 cm along the flange z axis, optional payload."""
+    """Flange site, collidable tool tip along the flange z axis (:func:`tool_tip_depth`), load."""
     frame = _sub(body, "body", name="flange", pos=_vec(flange[:3, 3]), quat=_quat(flange[:3, :3]))
     _sub(frame, "site", name=FLANGE_SITE, size="0.01")
-    _sub(frame, "geom", name=TOOL_GEOM, type="capsule", fromto="0 0 0 0 0 0.06",
+    _sub(frame, "geom", name=TOOL_GEOM, type="capsule", fromto=f"0 0 0 0 0 {TOOL_LENGTH:g}",
          size=f"{radius * 0.5:g}", material="tool", contype="1", conaffinity="1", mass="0",
          condim="3")  # fmt: skip
     if payload is not None:
