@@ -21,18 +21,6 @@ from leadthrough.twin.runner import simulate
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig
 
 
-@pytest.fixture(scope="module")
-def yumi() -> lt.RobotDescription:
-    """The shipped YuMi description."""
-    return lt.robots.yumi()
-
-
-@pytest.fixture(scope="module")
-def dyn(yumi) -> lt.Dynamics:
-    """Controller-side dynamics of the YuMi."""
-    return lt.Dynamics(yumi)
-
-
 def test_contact_cases_press_on_every_plant_with_every_hand():
     """One press per physics, seed and hand, nothing else."""
     chosen = cases("contact", seeds=(1, 2), hands=("relaxed", "stiff"))
@@ -42,12 +30,14 @@ def test_contact_cases_press_on_every_plant_with_every_hand():
 
 
 @pytest.mark.parametrize(("gap", "touches"), [(0.001, False), (-0.001, True)])
-def test_the_table_stands_its_gap_below_the_tools_tip(yumi, dyn, gap, touches):
+def test_the_table_stands_its_gap_below_the_tools_tip(gap, touches):
     """1 mm below the tip the tool does not touch the table at home; 1 mm above it, it does.
 
     The tip is where :func:`tool_tip_depth` says (the capsule and its rounded end): a
     table placed from the capsule's length alone (6 cm) stands 1.5 cm into the tool.
     """
+    yumi = lt.robots.yumi()
+    dyn = lt.Dynamics(yumi)
     flange = dyn.pose(yumi.home())[:3, 3]
     assert tool_tip_depth() == pytest.approx(0.075)
     twin = DigitalTwin(yumi, TwinConfig(table=TableSurface.below_tool(flange, gap)))
