@@ -67,7 +67,8 @@ LINES = {
 PATH_NAMES = (*LINES, "circle")
 #: The contact case's path: the hand presses the tool straight down onto a stiff table
 #: (:data:`TABLE_GAP` below the tool's tip at home) by :data:`PRESS_DEPTH` over a line's
-#: duration, 1.5 cm into it: 4.5 N with the relaxed hand, 45 N with the stiff (its limit 60).
+#: duration, 1.5 cm into it: the spring's 4.5 N relaxed, 45 N stiff (its limit 60). The
+#: YuMi's tool points down at home; on an arm whose tool does not, the table misses it.
 PRESS = "press"
 PRESS_DEPTH = 0.025  # [m]
 TABLE_GAP = 0.01  # [m]
