@@ -188,12 +188,12 @@ def cases(
         return [Case("dry", 1, "stiff", "sideways", r), Case("dry", 2, "relaxed", "upwards", r),
                 Case("lugre", 1, "stiff", "down-in", r),
                 Case("lugre", 2, "relaxed", "circle", r)]  # fmt: skip
+    if kind == "contact":
+        return [Case(physics, seed, hand, PRESS, r)
+                for physics in ("dry", "lugre") for seed in seeds for hand in hands]  # fmt: skip
     full = []
     for physics in ("dry", "lugre"):
         for seed in seeds:
-            if kind == "contact":
-                full += [Case(physics, seed, hand, PRESS, r) for hand in hands]
-                continue
             full += [Case(physics, seed, hand, path, r) for hand in hands for path in LINES]
             full.append(Case(physics, seed, hands[0], "circle", r))
     return full
@@ -201,13 +201,18 @@ def cases(
 
 def case_path(robot: RobotDescription, name: str, start: FloatArray | None = None) -> Path:
     """The hand's path ``name`` from ``start`` [m, world] (default: the flange at home)."""
-    start = Dynamics(robot).pose(robot.home())[:3, 3] if start is None else start
+    start = _home_flange(robot) if start is None else start
     if name == PRESS:
         return Line(start, start - np.array([0.0, 0.0, PRESS_DEPTH]), duration=LINE_DURATION)
     if name == "circle":
         return Circle(start + np.array([0.0, 0.08, 0.0]), 0.08, (0.0, 0.0, 1.0),
                       (0.0, -1.0, 0.0), duration=CIRCLE_DURATION)  # fmt: skip
     return Line(start, start + np.array(LINES[name]), duration=LINE_DURATION)
+
+
+def _home_flange(robot: RobotDescription) -> FloatArray:
+    """The flange's position at the robot's home pose [m, world]."""
+    return Dynamics(robot).pose(robot.home())[:3, 3]
 
 
 def _robot_or_yumi(robot: RobotDescription | None) -> RobotDescription:
@@ -326,8 +331,7 @@ def _run(
     grab = float(getattr(recorder.controller, "calibration_time", CalibrationParameters().duration))
     config = replace(plant.config, control_dt=recorder.dt or plant.config.control_dt)
     if case.path == PRESS:  # a table under the tool (which points down at home)
-        home = Dynamics(robot).pose(robot.home())[:3, 3]
-        config = replace(config, table=TableSurface.below_tool(home, TABLE_GAP))
+        config = replace(config, table=TableSurface.below_tool(_home_flange(robot), TABLE_GAP))
     twin = DigitalTwin(robot, config)
     observe_truth = getattr(recorder.controller, "observe_truth", None)
     if observe_truth is not None:  # an oracle (diagnosis): reads the twin's truth
