@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import tomllib
 from pathlib import Path
 
@@ -22,7 +23,14 @@ N = 7
 
 @pytest.fixture(scope="module")
 def model() -> FrictionModel:
-    """The YuMi's friction model (thesis Table 4.1)."""
+    """The YuMi's friction model (thesis Table 4.1), without the stiction excess: the thesis'."""
+    return dataclasses.replace(FrictionModel.from_robot(lt.robots.yumi()),
+                               stiction_excess=np.zeros(N))  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def with_excess() -> FrictionModel:
+    """The YuMi's friction model as the controller takes it: the default stiction excess."""
     return FrictionModel.from_robot(lt.robots.yumi())
 
 
@@ -40,6 +48,7 @@ def positional() -> FrictionModel:
         position_quadratic=rng.uniform(-0.3, 0.3, N),
         position_mid=rng.uniform(-0.5, 0.5, N),
         position_half_range=rng.uniform(1.0, 3.0, N),
+        stiction_excess=np.zeros(N),
     )
 
 
@@ -142,6 +151,60 @@ def test_std_at_rest_is_about_coulomb_and_noise(model):
     assert np.all(std > 10.0 * model.std(np.full(N, 0.5)))  # far larger than once moving
 
 
+def test_stiction_excess_widens_the_band_and_keeps_the_mean(model, with_excess):
+    """Mean as the thesis'; v_C = v_C⁰ + ½ e τ_C exp(−(q̇/v_s)²) (1 − v_C⁰/τ_C)."""
+    qd = velocity_grid(np.random.default_rng(11))
+    np.testing.assert_allclose(with_excess.mean(qd), model.mean(qd), rtol=0, atol=1e-14)
+    upper, lower = table_bounds(qd)
+    thesis = 0.5 * (upper - lower)  # v_C⁰, from the printed sigmoids
+    coulomb = np.asarray(TABLE_4_1_COULOMB)
+    bump = np.exp(-((qd / with_excess.stribeck_velocity) ** 2))
+    half = 0.5 * with_excess.stiction_excess
+    expected = thesis + half * coulomb * bump * (1.0 - thesis / coulomb)
+    np.testing.assert_allclose(with_excess.coulomb_uncertainty(qd), expected, atol=1e-12)
+    # at rest the thesis' band (±τ_C), far from the Stribeck range the noise alone
+    np.testing.assert_allclose(with_excess.std(np.zeros(N)), model.std(np.zeros(N)), rtol=1e-3)
+    fast = np.full(N, 0.3)
+    np.testing.assert_allclose(with_excess.std(fast), model.std(fast), rtol=1e-12)
+
+
+def test_the_band_holds_a_stribeck_curve_within_the_defaults():
+    """A Stribeck curve within the defaults lies inside the mean ± 2 std at every sliding speed.
+
+    Friction τ_C + (τ_S − τ_C) exp(−(q̇/v)²) with τ_S ≤ 1.5 τ_C and v ≤ 0.03 rad/s; without
+    the excess the band misses it.
+    """
+    with_excess = FrictionModel.from_robot(lt.robots.yumi())
+    thesis = dataclasses.replace(with_excess, stiction_excess=np.zeros(N))
+    coulomb = np.asarray(TABLE_4_1_COULOMB)
+    speed = np.geomspace(0.005, 1.0, 400)[:, None] * np.ones(N)  # past the sigmoids (≤ 4 mrad/s)
+    for ratio, stribeck in ((1.1, 0.005), (1.3, 0.02), (1.5, 0.03)):
+        for sign in (1.0, -1.0):
+            qd = sign * speed
+            true = sign * coulomb * (1.0 + (ratio - 1.0) * np.exp(-((speed / stribeck) ** 2)))
+            true = true + np.asarray(TABLE_4_1_VISCOUS) * qd
+            mean, std = with_excess.mean_and_std(qd)
+            upper, lower = mean + 2.0 * std, mean - 2.0 * std
+            slack = 1e-3 * coulomb  # the sigmoids' last 0.01 % at 5 mrad/s
+            assert np.all((true <= upper + slack) & (true >= lower - slack)), (ratio, stribeck)
+    mean, std = thesis.mean_and_std(speed)
+    true = coulomb * (1.0 + 0.5 * np.exp(-((speed / 0.03) ** 2))) + TABLE_4_1_VISCOUS * speed
+    assert np.any(true > mean + 2.0 * std + 0.1 * coulomb)
+
+
+def test_the_compiled_terms_equal_the_numpy_terms(with_excess, positional):
+    """terms_into (compiled) writes the rows sigmoid_terms computes, excess included."""
+    rng = np.random.default_rng(12)
+    stribeck = dataclasses.replace(positional, stiction_excess=rng.uniform(0.0, 0.6, N),
+                                   stribeck_velocity=rng.uniform(0.005, 0.05, N))  # fmt: skip
+    for friction in (with_excess, stribeck):
+        for qd in velocity_grid(rng)[::37]:
+            q = positions_in_range(friction, rng, N)
+            out = friction.terms_into(qd, q, np.empty((4, N)))
+            np.testing.assert_allclose(out, np.array(friction.sigmoid_terms(qd, q)),
+                                       rtol=1e-14, atol=1e-15)  # fmt: skip
+
+
 def test_functions_are_vectorised_over_samples_and_joints(positional):
     """mean, std and bounds on (N, n) arrays equal a loop over the rows."""
     rng = np.random.default_rng(6)
@@ -163,6 +226,7 @@ def test_functions_are_vectorised_over_samples_and_joints(positional):
                 half_width=[positional.half_width[j]],
                 viscous=[positional.viscous[j]],
                 noise_std=[positional.noise_std[j]],
+                stiction_excess=[0.0],
             )
             np.testing.assert_allclose(mean[k, j], model_j.mean([qd[k, j]])[0], rtol=1e-13)
             np.testing.assert_allclose(std[k, j], model_j.std([qd[k, j]])[0], rtol=1e-13)
@@ -255,6 +319,8 @@ def test_saved_file_without_position_terms_holds_only_the_table(model, tmp_path)
         "viscous",
         "noise_std",
         "relative_error",
+        "stiction_excess",
+        "stribeck_velocity",
     }
     assert table["coulomb"] == TABLE_4_1_COULOMB
 

@@ -478,11 +478,11 @@ class MomentumObserver:
         threshold = (friction.half_width + 5.0 / friction.slope
                      if self.parameters.moving_velocity is None
                      else np.full(friction.n_joints, self.parameters.moving_velocity))  # fmt: skip
+        # moving: past the sigmoids and past the Stribeck range (4 v_s: its band's share
+        # below 1e-7), where the friction model's std is its noise σ
+        moving = 2.0 * threshold + np.maximum(0.05, 4.0 * friction.stribeck_velocity)
         levels: dict[str, list[float]] = {}
-        for name, speed in (
-            ("still", np.zeros_like(threshold)),
-            ("moving", 2.0 * threshold + 0.05),
-        ):
+        for name, speed in (("still", np.zeros_like(threshold)), ("moving", moving)):
             noises = self.parameters.friction_noise_scale * self.friction.std(speed) ** 2
             for noise, torque_noise in zip(noises, self.torque_noise, strict=True):
                 p = self.parameters

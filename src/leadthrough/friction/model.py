@@ -14,8 +14,24 @@ uncertainty (4.5); a constant term ``σ`` adds measurement noise and irregularit
     std(q̇)  = sqrt(v_C² + σ²)
 
 so that at rest the friction is anywhere within ±τ_C (mean 0, large std) and once
-moving it is known to within ``σ``. Beyond the thesis, the Coulomb level may depend on
-the joint position (the cable effect of §4.1.3), smoothly, with two parameters::
+moving it is known to within ``σ``. Beyond the thesis, two things.
+
+Real joints' friction is higher than the Coulomb level at low sliding speeds (stiction
+and the Stribeck curve: up to ``(1 + e) τ_C`` below a Stribeck velocity ``v_s``), which
+the sigmoids do not describe. Once the joint slides, the model's band holds it, its mean
+kept::
+
+    x(q̇) = ½ e · exp(−(q̇ / v_s)²) · (1 − v_C⁰(q̇) / τ_C)        (v_C⁰ the sigmoids' own)
+    τ_f,max += x τ_C,    τ_f,min −= x τ_C,    so  v_C = v_C⁰ + x τ_C,  mean unchanged
+
+``1 − v_C⁰ / τ_C`` is 0 at rest (where the thesis' band stands) and 1 once sliding.
+The mean stays the thesis': a model that assumed the excess would overstate the friction
+of a joint that has less, and a released arm would read that as a push along its
+motion. The friction then lies between the mean and ``e`` above it, which the ±2 std band
+(std = v_C, as the thesis takes it) reaches with half of ``e``.
+
+The Coulomb level may depend on the joint position (the cable effect of §4.1.3),
+smoothly, with two parameters::
 
     τ_C(q) = τ_C · (1 + k₁ u + k₂ u²),   u = clip((q − q_mid) / q_half, −1, 1)
 
@@ -48,11 +64,21 @@ from leadthrough.validation import real_array
 _PARAMETERS = ("coulomb", "slope", "half_width", "viscous", "noise_std")
 _POSITION = ("position_linear", "position_quadratic", "position_mid", "position_half_range")
 _ERROR = ("relative_error",)
+_STRIBECK = ("stiction_excess", "stribeck_velocity")
 #: Relative error of the Coulomb levels of a model that does not say (Table 4.1 was tuned by
 #: hand: the project's robustness target, friction off by ±20 %).
 DEFAULT_RELATIVE_ERROR = 0.2
+#: Stiction excess over the Coulomb level a model that does not say allows for [–]: geared
+#: joints' static friction is 1.1–1.5× their Coulomb level (Armstrong-Hélouvry 1994; the
+#: plant family of issue 13), so up to half of it.
+DEFAULT_STICTION_EXCESS = 0.5
+#: Stribeck velocity a model that does not say allows for [rad/s]: the top of the plant
+#: family's 0.005–0.03 rad/s (the issue's plant 0.02).
+DEFAULT_STRIBECK_VELOCITY = 0.03
 #: Largest q̇ (in values) whose sigmoid terms are remembered: one sample of any arm.
 _REMEMBERED_SIZE = 64
+#: Speeds beyond this many Stribeck velocities see the bump held at its value there.
+_BUMP_END = 20.0
 #: Default of the optional fields: ``__post_init__`` fills in an (n,) array.
 _FILLED_IN: Any = None
 
@@ -86,6 +112,10 @@ class FrictionModel:
             fraction [–] (0.2 unless an identification measured it along the travel,
             :mod:`leadthrough.friction.along_travel`); the active law's friction margin,
             the compensation's ceiling and the observer's band are sized with it.
+        stiction_excess: e, how far above τ_C(q) the friction of a joint sliding slower
+            than ``stribeck_velocity`` may be, as a fraction of it [–], ≥ 0 (it widens the
+            band, not the mean; 0: the thesis' model).
+        stribeck_velocity: v_s, the speed over which that excess fades [rad/s], > 0.
     """
 
     coulomb: FloatArray
@@ -98,23 +128,29 @@ class FrictionModel:
     position_mid: FloatArray = _FILLED_IN
     position_half_range: FloatArray = _FILLED_IN
     relative_error: FloatArray = _FILLED_IN
+    stiction_excess: FloatArray = _FILLED_IN
+    stribeck_velocity: FloatArray = _FILLED_IN
 
     def __post_init__(self) -> None:
-        given = {name: getattr(self, name) for name in _PARAMETERS + _POSITION + _ERROR}
+        given = {name: getattr(self, name)
+                 for name in _PARAMETERS + _POSITION + _ERROR + _STRIBECK}  # fmt: skip
         lengths = [np.size(value) for value in given.values() if value is not None]
         n = max(set(lengths), key=lengths.count)  # the length most fields agree on
         defaults = {"position_linear": 0.0, "position_quadratic": 0.0, "position_mid": 0.0,
-                    "position_half_range": 1.0,
-                    "relative_error": DEFAULT_RELATIVE_ERROR}  # fmt: skip
+                    "position_half_range": 1.0, "relative_error": DEFAULT_RELATIVE_ERROR,
+                    "stiction_excess": DEFAULT_STICTION_EXCESS,
+                    "stribeck_velocity": DEFAULT_STRIBECK_VELOCITY}  # fmt: skip
         for name, value in given.items():
             if value is None:
                 value = np.full(n, defaults[name])
             if np.shape(value) == (n,) and np.asarray(value).dtype.kind in "fiu":
                 _require(name, np.isfinite(np.asarray(value, dtype=float)), "finite")
             object.__setattr__(self, name, real_array(name, value, (n,), error=ParameterError))
-        for name in ("coulomb", "half_width", "viscous", "noise_std", "relative_error"):
+        for name in ("coulomb", "half_width", "viscous", "noise_std", "relative_error",
+                     "stiction_excess"):  # fmt: skip
             _require(name, getattr(self, name) >= 0.0, "≥ 0")
         _require("slope", self.slope > 0.0, "> 0")
+        _require("stribeck_velocity", self.stribeck_velocity > 0.0, "> 0")
         _require("position_half_range", self.position_half_range > 0.0, "> 0")
         _require("position_linear", level_stays_positive(self.position_linear,
                  self.position_quadratic), "such that τ_C(q) > 0 over the whole range")  # fmt: skip
@@ -132,6 +168,16 @@ class FrictionModel:
     @cached_property
     def _position_dependent(self) -> bool:
         return self.has_position_dependence
+
+    @cached_property
+    def _inverse_stribeck(self) -> FloatArray:
+        """1 / v_s [s/rad], (n,)."""
+        return 1.0 / self.stribeck_velocity
+
+    @cached_property
+    def _half_excess(self) -> FloatArray:
+        """½ e [–], (n,)."""
+        return 0.5 * self.stiction_excess
 
     @property
     def level_std(self) -> FloatArray:
@@ -175,10 +221,11 @@ class FrictionModel:
     def sigmoid_terms(
         self, qd: ArrayLike, q: ArrayLike | None
     ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """τ_C(q), c q̇ and tanh(A (q̇ ± B) / 2), the terms of every output below.
+        """τ_C(q), c q̇ and tanh(A (q̇ ± B) / 2) ± x(q̇), the terms of every output below.
 
         Since 2 s(x) − 1 = tanh(x/2), the sigmoid pair, mean and uncertainty are sums and
-        differences of the two tanh terms: one evaluation serves them all.
+        differences of the two tanh terms: one evaluation serves them all. The stiction
+        excess x (module docstring) widens the pair without moving its mean.
 
         Raises:
             InputShapeError: ``qd`` or ``q`` has a last axis of neither one value per
@@ -199,7 +246,11 @@ class FrictionModel:
         centre = self._half_slope * qd
         upper = np.tanh(centre + self._half_slope_width)
         lower = np.tanh(centre - self._half_slope_width)
-        terms = self.coulomb_level(q), self.viscous * qd, upper, lower
+        # beyond 20 v_s the bump is below 1e-173: held there, it neither under- nor overflows
+        ratio = np.minimum(np.abs(qd) * self._inverse_stribeck, _BUMP_END)
+        excess = self._half_excess * np.exp(-ratio * ratio)
+        excess = excess * (1.0 + 0.5 * (lower - upper))  # 0 at rest, whole once sliding
+        terms = self.coulomb_level(q), self.viscous * qd, upper + excess, lower - excess
         if small:
             self._last[0] = (key, terms)
         return terms
@@ -220,7 +271,7 @@ class FrictionModel:
             qd: Joint velocities [rad/s], (n,) floats.
             q: Joint positions [rad], (n,) floats.
             out: (4, n) floats, written with the rows τ_C(q), c q̇, tanh(A (q̇ + B) / 2)
-                and tanh(A (q̇ − B) / 2).
+                + x(q̇) and tanh(A (q̇ − B) / 2) − x(q̇).
 
         Returns:
             ``out``.
@@ -230,10 +281,11 @@ class FrictionModel:
 
     @cached_property
     def _term_rows(self) -> FloatArray:
-        """The per-joint constants of :func:`_sigmoid_terms`, (8, n)."""
+        """The per-joint constants of :func:`_sigmoid_terms`, (10, n)."""
         return np.array([self.coulomb, self.position_linear, self.position_quadratic,
                          self.position_mid, self.position_half_range, self._half_slope,
-                         self._half_slope_width, self.viscous])  # fmt: skip
+                         self._half_slope_width, self.viscous, self._half_excess,
+                         self._inverse_stribeck])  # fmt: skip
 
     @cached_property
     def _last(self) -> list[tuple | None]:
@@ -281,7 +333,8 @@ class FrictionModel:
 
     def to_dict(self) -> dict[str, list[float]]:
         """Plain-data form (lists per parameter) for TOML."""
-        names = _PARAMETERS + _ERROR + (_POSITION if self.has_position_dependence else ())
+        names = _PARAMETERS + _ERROR + _STRIBECK + (_POSITION if self.has_position_dependence
+                                                    else ())  # fmt: skip
         return {name: getattr(self, name).tolist() for name in names}
 
     def save(self, path: str | Path) -> None:
@@ -316,7 +369,7 @@ def _sigmoid_terms(qd, q, rows, position_dependent, out):  # fmt: skip
     """:meth:`FrictionModel.sigmoid_terms` of one sample into ``out`` (4, n), compiled.
 
     The same arithmetic, in the same order, as the NumPy code (the level clipped to the
-    span as ``np.clip``, NaN passing through); ``rows`` are
+    span as ``np.clip``, NaN passing through; the stiction excess after the pair); ``rows`` are
     :attr:`FrictionModel._term_rows`.
     """
     for i in range(qd.shape[0]):
@@ -326,10 +379,15 @@ def _sigmoid_terms(qd, q, rows, position_dependent, out):  # fmt: skip
             u = -1.0 if u < -1.0 else (1.0 if u > 1.0 else u)
             level = level * (1.0 + rows[1, i] * u + rows[2, i] * u * u)
         centre = rows[5, i] * qd[i]
+        upper = math.tanh(centre + rows[6, i])
+        lower = math.tanh(centre - rows[6, i])
+        ratio = abs(qd[i]) * rows[9, i]
+        ratio = ratio if ratio < 20.0 or ratio != ratio else 20.0  # _BUMP_END (np.minimum)
+        excess = rows[8, i] * math.exp(-ratio * ratio) * (1.0 + 0.5 * (lower - upper))
         out[0, i] = level
         out[1, i] = rows[7, i] * qd[i]
-        out[2, i] = math.tanh(centre + rows[6, i])
-        out[3, i] = math.tanh(centre - rows[6, i])
+        out[2, i] = upper + excess
+        out[3, i] = lower - excess
 
 
 def level_stays_positive(linear: ArrayLike, quadratic: ArrayLike) -> NDArray[np.bool_]:
