@@ -384,3 +384,31 @@ def follow_push_uncalibrated(robot: lt.RobotDescription, mode: str) -> lt.LeadTh
     """
     return _build(robot, mode, calibrate=False,
                   compensation=CoulombCompensationParameters(follow_push="always"))  # fmt: skip
+
+
+#: The stiction excess the plant family's band needs (stiction up to 1.5× Coulomb).
+STIFF_STICTION = 0.5
+
+
+class _StribeckBand(lt.LeadThrough):
+    """The nominal friction model with a band that holds the Stribeck range (not identified)."""
+
+    def __init__(self, robot: lt.RobotDescription, **options: Any) -> None:
+        super().__init__(robot, **options)
+        excess = np.full(robot.n_joints, STIFF_STICTION)
+        self.nominal_friction = dataclasses.replace(self.nominal_friction, stiction_excess=excess)
+        self.reset()
+
+
+def stribeck_band(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """Active mode's friction band holds a stiction excess of 0.5 τ_C below 0.03 rad/s.
+
+    ``FrictionModel.stiction_excess`` (the default is the thesis' band, 0): the observer's
+    std and the joints read together see it, the active law does not.
+    """
+    return _build(robot, mode, cls=_StribeckBand)
+
+
+def stribeck_band_uncalibrated(robot: lt.RobotDescription, mode: str) -> lt.LeadThrough:
+    """:func:`stribeck_band` without the start-up calibration (run with ``--uncalibrated``)."""
+    return _build(robot, mode, cls=_StribeckBand, calibrate=False)

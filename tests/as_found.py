@@ -11,7 +11,6 @@ from leadthrough.control.dither import DitherParameters
 from leadthrough.control.feedforward import PassiveFeedForward
 from leadthrough.control.interface_delay import InterfaceDelay
 from leadthrough.control.lead_through import LeadThrough
-from leadthrough.friction import model as friction_model
 from leadthrough.friction.compensation import CoulombCompensationParameters
 
 #: Before: 5 mrad at 0.05 rad/s, inside the plants' Stribeck range, a level refused
@@ -191,12 +190,3 @@ def diagonal_damping(monkeypatch) -> None:
 def told_measurement_delay(monkeypatch) -> None:
     """Every controller keeps the ``measurement_delay`` it is told, as before it read it."""
     monkeypatch.setattr(InterfaceDelay, "update", lambda estimate, tau_measured: estimate.delay)
-
-
-def thesis_friction_band(monkeypatch) -> None:
-    """Every friction model built in the test has the thesis' band: no stiction excess.
-
-    Before ``FrictionModel.stiction_excess`` the band narrowed to the level's error within
-    a few mrad/s, inside the plants' Stribeck range; the cases found then ran on with it.
-    """
-    monkeypatch.setattr(friction_model, "DEFAULT_STICTION_EXCESS", 0.0)

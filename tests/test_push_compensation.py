@@ -14,12 +14,7 @@ import numpy as np
 import pytest
 
 import leadthrough as lt
-from as_found import (
-    constant_gravity_bias,
-    diagonal_damping,
-    observer_readings,
-    thesis_friction_band,
-)
+from as_found import constant_gravity_bias, diagonal_damping, observer_readings
 from leadthrough.control.admittance import signed_push_weight
 from leadthrough.control.feedforward import PassiveFeedForward
 from leadthrough.errors import ParameterError
@@ -245,13 +240,12 @@ def test_on_a_calibrated_arm_following_the_push_shakes_less_than_the_thesis_law(
     push 0.96× (one of 742 of the 2013 paired calibrated cases of docs/guiding_results.md
     that shake less by more than 0.05; 151 shake more). With the calibration reading the
     observer and its gravity error kept constant, as when it was measured (read from the
-    momentum balance, both laws shake about as passive mode). And with the diagonal damping,
-    the thesis' dither in active mode and the thesis' friction band of the time.
+    momentum balance, both laws shake about as passive mode). And with the diagonal damping
+    and the thesis' dither in active mode of the time.
     """
     observer_readings(monkeypatch)
     constant_gravity_bias(monkeypatch)
     diagonal_damping(monkeypatch)
-    thesis_friction_band(monkeypatch)
     case = Case("lugre", 3, "relaxed", "sideways")
     calibrated = functools.partial(_guiding, calibrate=True)
     passive = run_case(case, "passive", calibrated).vibration

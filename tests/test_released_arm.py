@@ -30,7 +30,6 @@ from as_found import (
     six_hertz_calibration,
     slow_calibration_motion,
     thesis_compensation,
-    thesis_friction_band,
     told_measurement_delay,
     two_second_park,
     uncapped_dither,
@@ -426,8 +425,7 @@ def test_a_joint_running_ahead_of_its_references_is_braked_not_followed(cls, run
     and the references are not unwound, each joint's Coulomb band is its own, the
     compensation the thesis' and the resting reference drawn after a joint that moves (as
     when the case was found; today's reference stays, which also stops it), and the
-    measurement delay as told (the plant's, read from the data, also stops it), and the
-    thesis' friction band (today's, holding the Stribeck range, also stops it).
+    measurement delay as told (the plant's, read from the data, also stops it).
     """
     monkeypatch.setattr(calibration, "_JUMPING", np.inf)
     _calibration_of_the_time(monkeypatch)
@@ -435,7 +433,6 @@ def test_a_joint_running_ahead_of_its_references_is_braked_not_followed(cls, run
     own_rest_bands(monkeypatch)
     thesis_compensation(monkeypatch)
     told_measurement_delay(monkeypatch)  # dry #20 has two periods of delay
-    thesis_friction_band(monkeypatch)
     if runs:  # the resting reference of the time, which followed a joint that runs
         settled_after_moving_joints(monkeypatch)
 
@@ -473,13 +470,11 @@ def test_a_joint_the_calibration_read_only_a_few_times_keeps_its_level(few_read,
     out +20 % and 0.16 Nm off, and the passive feed-forward ran the released arm on; with
     the model's level and its gravity counted as not known, the arm stops. With the
     calibration motion and the observer's readings of the time (the default motion slides
-    that wrist long enough; the momentum balance reads it within 5 % even from few samples),
-    and the thesis' friction band (today's, holding the Stribeck range, also stops it).
+    that wrist long enough; the momentum balance reads it within 5 % even from few samples).
     """
     slow_calibration_motion(monkeypatch)
     unread_torque_offset(monkeypatch)
     observer_readings(monkeypatch)
-    thesis_friction_band(monkeypatch)
     if few_read:
         monkeypatch.setattr(calibration, "_MEASURED", 0.0)
     result = run_case(FEW_READINGS, "passive", _passive())

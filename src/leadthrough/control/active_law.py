@@ -157,13 +157,17 @@ class ActiveLaw:
         """The per-joint margins and tolerances for ``friction`` (nominal or calibrated).
 
         Args:
-            friction: The friction model in use.
+            friction: The friction model in use (the law takes it without its stiction
+                excess).
             measured: The joints whose Coulomb level was measured on this arm (the
                 start-up calibration's); None: none. The others' error is at least
                 ``unmeasured_friction_error`` (unless ``friction_uncertainty`` says).
         """
         p = self.parameters
-        self.friction = friction
+        # the thesis' band: a stiction excess makes the friction higher than the model's
+        # mean, which reads as drag against the motion, never as a push along it, so it
+        # widens no band a push is weighed against (FrictionModel.stiction_excess)
+        self.friction = friction.without_stiction_excess()
         if p.friction_uncertainty is None:
             unmeasured = np.maximum(friction.relative_error, p.unmeasured_friction_error)
             relative = (unmeasured if measured is None
