@@ -18,8 +18,8 @@ moving it is known to within ``σ``. Beyond the thesis, two things.
 
 Real joints' friction is higher than the Coulomb level at low sliding speeds (stiction
 and the Stribeck curve: up to ``(1 + e) τ_C`` below a Stribeck velocity ``v_s``), which
-the sigmoids do not describe. Once the joint slides, the model's band holds it, its mean
-kept::
+the sigmoids do not describe. Asked for (``stiction_excess`` e > 0; 0 by default, the
+thesis' band), the model's band holds it once the joint slides, its mean kept::
 
     x(q̇) = ½ e · exp(−(q̇ / v_s)²) · (1 − v_C⁰(q̇) / τ_C)        (v_C⁰ the sigmoids' own)
     τ_f,max += x τ_C,    τ_f,min −= x τ_C,    so  v_C = v_C⁰ + x τ_C,  mean unchanged
@@ -27,8 +27,10 @@ kept::
 ``1 − v_C⁰ / τ_C`` is 0 at rest (where the thesis' band stands) and 1 once sliding.
 The mean stays the thesis': a model that assumed the excess would overstate the friction
 of a joint that has less, and a released arm would read that as a push along its
-motion. The friction then lies between the mean and ``e`` above it, which the ±2 std band
-(std = v_C, as the thesis takes it) reaches with half of ``e``.
+motion; for the same reason the active law never reads the excess (it is drag, never a
+push along the motion: ``ActiveLaw.use_friction``). The friction then lies between the
+mean and ``e`` above it, which the ±2 std band (std = v_C, as the thesis takes it) reaches
+with half of ``e``.
 
 The Coulomb level may depend on the joint position (the cable effect of §4.1.3),
 smoothly, with two parameters::
