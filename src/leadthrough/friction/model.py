@@ -74,7 +74,7 @@ DEFAULT_RELATIVE_ERROR = 0.2
 #: static friction is 1.1–1.5× their Coulomb level (Armstrong-Hélouvry 1994; the plant
 #: family of issue 13), which 0.5 holds: on the guiding benchmark that band covers the
 #: slow slips of a press (68 → 83 % of the moving samples) and costs 0.01 (the YuMi) to 0.04
-#: (the UR10e) of passive's effort through the estimate (docs/guiding_results.md, *A band
+#: (the UR10e) of passive's effort through the estimate (docs/active_mode_log.md, *A band
 #: that holds the Stribeck range*), so it is asked for, not the default.
 DEFAULT_STICTION_EXCESS = 0.0
 #: Stribeck velocity of a model that does not say [rad/s]: the top of the plant family's
