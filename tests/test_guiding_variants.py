@@ -21,7 +21,7 @@ FACTORIES = ("no_unwinding", "no_weighting", "full_residual", "long_stroke", "lo
              "plain_admittance", "own_rest_uncertainty", "no_credit_at_rest",
              "no_credit_at_rest_uncalibrated", "no_drive_gain_margin",
              "relieved_friction_margin", "relieved_wider_margin",
-             "relieved_widest_margin")  # fmt: skip
+             "relieved_widest_margin", "stribeck_band", "stribeck_band_uncalibrated")  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -46,6 +46,19 @@ def test_a_variant_law_is_the_one_that_runs(robot, name):
     variant = _pushed(robot, getattr(guiding_variants, name)(robot, "active"))
     default = _pushed(robot, lt.LeadThrough(robot, mode="active"))
     assert np.max(np.abs(variant.operator_torque - default.operator_torque)) > 1e-3
+
+
+def test_the_stribeck_band_is_the_observers_not_the_laws_and_nothing_counts_as_measured(robot):
+    """The nominal model with a stiction excess: the observer's band holds it, the law does not.
+
+    Passing it as ``friction=`` would count its levels as identified on this arm; the variant
+    keeps them unmeasured, as the default's (their error ``unmeasured_friction_error``).
+    """
+    variant = guiding_variants.stribeck_band_uncalibrated(robot, "active")
+    default = lt.LeadThrough(robot, mode="active")
+    assert np.all(variant.observer.friction.stiction_excess == guiding_variants.STIFF_STICTION)
+    assert not np.any(variant.law.friction.stiction_excess)
+    np.testing.assert_array_equal(variant.law.friction_error, default.law.friction_error)
 
 
 def test_without_credit_at_rest_a_creep_reads_no_push_and_the_report_stays(robot):
