@@ -184,6 +184,11 @@ class FrictionModel:
         """½ e [–], (n,)."""
         return 0.5 * self.stiction_excess
 
+    @cached_property
+    def _has_excess(self) -> bool:
+        """Whether any joint has a stiction excess (else the thesis' pair, as it is)."""
+        return bool(np.any(self.stiction_excess))
+
     @property
     def level_std(self) -> FloatArray:
         """Standard deviation of the Coulomb levels' relative error [–], (n,).
@@ -198,7 +203,7 @@ class FrictionModel:
 
     def without_stiction_excess(self) -> FrictionModel:
         """This model with the thesis' band: no stiction excess (``stiction_excess`` 0)."""
-        if not np.any(self.stiction_excess):
+        if not self._has_excess:
             return self
         return replace(self, stiction_excess=np.zeros(self.n_joints))
 
@@ -257,11 +262,14 @@ class FrictionModel:
         centre = self._half_slope * qd
         upper = np.tanh(centre + self._half_slope_width)
         lower = np.tanh(centre - self._half_slope_width)
-        # beyond 20 v_s the bump is below 1e-173: held there, it neither under- nor overflows
-        ratio = np.minimum(np.abs(qd) * self._inverse_stribeck, _BUMP_END)
-        excess = self._half_excess * np.exp(-ratio * ratio)
-        excess = excess * (1.0 + 0.5 * (lower - upper))  # 0 at rest, whole once sliding
-        terms = self.coulomb_level(q), self.viscous * qd, upper + excess, lower - excess
+        if self._has_excess:
+            # beyond 20 v_s the bump is below 1e-173: held there, it neither under- nor
+            # overflows
+            ratio = np.minimum(np.abs(qd) * self._inverse_stribeck, _BUMP_END)
+            excess = self._half_excess * np.exp(-ratio * ratio)
+            excess = excess * (1.0 + 0.5 * (lower - upper))  # 0 at rest, whole once sliding
+            upper, lower = upper + excess, lower - excess
+        terms = self.coulomb_level(q), self.viscous * qd, upper, lower
         if small:
             self._last[0] = (key, terms)
         return terms
@@ -392,13 +400,15 @@ def _sigmoid_terms(qd, q, rows, position_dependent, out):  # fmt: skip
         centre = rows[5, i] * qd[i]
         upper = math.tanh(centre + rows[6, i])
         lower = math.tanh(centre - rows[6, i])
-        ratio = abs(qd[i]) * rows[9, i]
-        ratio = ratio if ratio < 20.0 or ratio != ratio else 20.0  # _BUMP_END (np.minimum)
-        excess = rows[8, i] * math.exp(-ratio * ratio) * (1.0 + 0.5 * (lower - upper))
+        if rows[8, i] != 0.0:  # the stiction excess (none: the thesis' pair as it is)
+            ratio = abs(qd[i]) * rows[9, i]
+            ratio = ratio if ratio < _BUMP_END or ratio != ratio else _BUMP_END  # np.minimum
+            excess = rows[8, i] * math.exp(-ratio * ratio) * (1.0 + 0.5 * (lower - upper))
+            upper, lower = upper + excess, lower - excess
         out[0, i] = level
         out[1, i] = rows[7, i] * qd[i]
-        out[2, i] = upper + excess
-        out[3, i] = lower - excess
+        out[2, i] = upper
+        out[3, i] = lower
 
 
 def level_stays_positive(linear: ArrayLike, quadratic: ArrayLike) -> NDArray[np.bool_]:
