@@ -27,6 +27,18 @@ def test_cases_guided_without_a_calibration_are_counted_and_named():
     assert guiding_quality.uncalibrated_line({"x": {"calibrated": 1.0}}).endswith(": 0 of 1 cases")
 
 
+def test_cases_over_a_per_case_goal_are_counted_and_named_worst_first():
+    """Every case above a goal that each case must keep is named, worst first, per figure."""
+    keep = {"vibration": 1.0, "speed": 0.9, "stop": 0.2, "drift": 0.3,
+            "stop_passive": 0.2, "drift_passive": 0.3}  # fmt: skip
+    results = {"a": keep | {"vibration": 1.6}, "b": keep | {"vibration": 2.1, "drift": 1.0},
+               "c": keep | {"speed": 1.0}}  # fmt: skip
+    line = guiding_quality.over_goal_line(results)
+    # 1.0 of the speed bound keeps its goal (≤ 1), 1.0 mrad of drift does not (< 1)
+    assert line == "over a per-case goal: vibration 2 of 3 (b 2.1, a 1.6); drift 1 of 3 (b 1)"
+    assert guiding_quality.over_goal_line({"a": keep}) == "over a per-case goal: none"
+
+
 def test_other_hands_make_the_cases_and_an_unknown_one_is_a_one_line_error(capsys):
     """``--hands soft,firm``: 100 and 1000 N/m on the lines, the circle with the first."""
     from leadthrough.experiments.guiding import HANDS, cases
