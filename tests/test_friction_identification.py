@@ -86,6 +86,44 @@ def test_gaussian_model_is_honest_on_sliding_samples(default_study):
         assert np.mean(np.abs(tau[sliding] - mean) < 3 * std) > 0.97
 
 
+def test_a_resting_joint_keeps_its_whole_band_after_identification(default_study, yumi):
+    """At a dithered joint's twitch (±0.4 mrad/s) the identified model still says "at rest".
+
+    The excitation passes through zero speed in a sample or two, and its fit closed the
+    band at 0.2–0.4 mrad/s: with it the observer read a resting wrist's twitch as full
+    Coulomb friction, ±τ_C square waves at the dither's 15 Hz (docs/active_mode_log.md,
+    *An identified model's rest band*). The prior's band is the narrowest it may be.
+    """
+    model, prior = default_study.model, lt.FrictionModel.from_robot(yumi)
+    assert np.all(model.half_width >= prior.half_width)
+    assert np.all(model.slope * model.half_width >= prior.slope * prior.half_width)
+    pose = model.position_mid
+    for twitch in (-4e-4, 4e-4):
+        speeds = np.full(7, twitch)
+        level = model.coulomb_level(pose)
+        assert np.all(np.abs(model.mean(speeds, pose)) < 0.1 * level)
+        assert np.all(model.std(speeds, pose) > 0.85 * level)
+
+
+def test_the_fit_widens_a_rest_band_the_data_show_wider():
+    """Slow samples drawn from a wider band (B = 10 mrad/s) move the fit off the prior's."""
+    from leadthrough.friction.identification import _fit_sigmoids
+
+    wide = lt.FrictionModel(coulomb=[1.0], slope=[2000.0], half_width=[0.01], viscous=[0.5],
+                            noise_std=[0.02])  # fmt: skip
+    rng = np.random.default_rng(3)
+    qd = rng.uniform(-0.08, 0.08, 4000)[:, None]
+    tau = rng.normal(wide.mean(qd), wide.std(qd))[:, 0]
+    (slope, half_width), _ = _fit_sigmoids(qd[:, 0], np.ones(4000), 0.5, 0.02, tau,
+                                           (5e3, 2e-3))  # fmt: skip
+    assert half_width == pytest.approx(0.01, rel=0.3)
+    fitted = lt.FrictionModel(coulomb=[1.0], slope=[slope], half_width=[half_width],
+                              viscous=[0.5], noise_std=[0.02])  # fmt: skip
+    speeds = np.array([[0.0], [0.005], [0.01], [0.02]])
+    np.testing.assert_allclose(fitted.std(speeds), wide.std(speeds), atol=0.15)
+    np.testing.assert_allclose(fitted.mean(speeds), wide.mean(speeds), atol=0.15)
+
+
 def test_report_carries_fit_quality(default_study):
     """The report gives residual RMS and parameter standard deviations per joint."""
     report = default_study.report

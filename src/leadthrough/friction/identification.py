@@ -19,7 +19,11 @@ Per joint, from the logs where that joint moved:
 4. the noise σ is the standard deviation of the sliding residual (the thesis' "variance
    of the friction torque at high velocities");
 5. the sigmoid slope A and half-width B are fitted (SciPy ``least_squares``, robust loss)
-   to the slow samples with τ_C and c held;
+   to the slow samples with τ_C and c held, and may widen the prior's rest band but not
+   narrow it (B and A B at least the prior's): an excitation passes through zero speed in
+   a sample or two and never dithers, so its data cannot say how slow a joint must be to
+   rest, and a band fitted to them closed at 0.2–0.4 mrad/s, where a dithered joint at
+   rest twitches (the prior, the thesis' Table 4.1 for the YuMi: 2–3 mrad/s);
 6. the level's relative error (``relative_error``): 3 std of τ_C plus the largest
    deviation of the level measured along the travel, up and down strokes compared at the
    same positions, the other joints still (:mod:`leadthrough.friction.along_travel`, free
@@ -360,9 +364,9 @@ def _fit_joint(
     slow = np.abs(qd) < 2.0 * settings.sliding_velocity
     if slow.sum() >= 20:
         level = _level(values, j, u[slow])
-        start = (values["slope"][j], values["half_width"][j])
+        prior = (values["slope"][j], values["half_width"][j])  # the rest band's floor
         params, std = _fit_sigmoids(qd[slow], level, values["viscous"][j],
-                                    values["noise_std"][j], tau[slow], start)  # fmt: skip
+                                    values["noise_std"][j], tau[slow], prior)  # fmt: skip
         (values["slope"][j], values["half_width"][j]) = params
         report.parameter_std["slope"][j], report.parameter_std["half_width"][j] = std
 
@@ -433,7 +437,7 @@ def _fit_sigmoids(
     viscous: float,
     noise_std: float,
     tau: FloatArray,
-    start: tuple[float, float],
+    prior: tuple[float, float],
 ) -> tuple[FloatArray, FloatArray]:
     """Fit A and B so that the Gaussian model describes the slow samples.
 
@@ -442,13 +446,18 @@ def _fit_sigmoids(
     mean, so that near zero velocity, where stiction and Stribeck effects make the
     friction anything between −τ_S and +τ_S, the model's standard deviation is honest.
 
+    The rest band is the prior's ``(A, B)`` at its narrowest: the fit runs over the
+    band's half-point B and its opening at rest A B (``v_C(0) = τ_C tanh(A B / 2)``),
+    each bounded below by the prior's (module docstring, step 5).
+
     Returns:
         (A, B) and their standard deviations.
     """
     scale = max(float(np.max(level)), noise_std, 1e-9)  # a zero level (τ_C bounded at 0)
 
     def residual(log_params: FloatArray) -> FloatArray:
-        slope, half_width = np.exp(log_params)
+        opening, half_width = np.exp(log_params)
+        slope = opening / half_width
         upper = sigmoid(slope * (qd + half_width))
         lower = sigmoid(slope * (qd - half_width))
         deviation = tau - (level * (upper + lower - 1.0) + viscous * qd)
@@ -457,10 +466,19 @@ def _fit_sigmoids(
 
     from scipy import optimize  # at call time: scipy.optimize takes 0.15 s to import
 
-    bounds = (np.log([50.0, 1e-5]), np.log([1e5, 0.05]))
-    initial = np.clip(np.log(start), bounds[0] + 1e-9, bounds[1] - 1e-9)
-    fit = optimize.least_squares(residual, initial, bounds=bounds, loss="soft_l1", f_scale=0.05)
-    params = np.exp(fit.x)
+    prior_slope, prior_width = prior
+    # log (A B) and log B: A within [50, 1e5] s/rad and B within [1e-5, 0.05] rad/s, as
+    # before the floor, each at least the prior's
+    low = np.log([max(prior_slope * prior_width, 50.0 * 1e-5), max(prior_width, 1e-5)])
+    high = np.maximum(np.log([1e5 * 0.05, 0.05]), low + 1e-6)
+    start = np.clip(np.log([prior_slope * prior_width, prior_width]), low + 1e-9, high - 1e-9)
+    fit = optimize.least_squares(residual, start, bounds=(low, high), loss="soft_l1",
+                                 f_scale=0.05)  # fmt: skip
+    opening, half_width = np.exp(fit.x)
     dof = max(2 * len(qd) - 2, 1)
+    # the covariance of (log A B, log B), carried to (A, B): log A = log A B − log B
     covariance = np.linalg.pinv(fit.jac.T @ fit.jac) * 2.0 * fit.cost / dof
-    return params, params * np.sqrt(np.diag(covariance))
+    to_log_slope = np.array([[1.0, -1.0], [0.0, 1.0]])
+    log_std = np.sqrt(np.diag(to_log_slope @ covariance @ to_log_slope.T))
+    params = np.array([opening / half_width, half_width])
+    return params, params * log_std
