@@ -90,7 +90,7 @@ def test_a_resting_joint_keeps_its_whole_band_after_identification(default_study
     """At a dithered joint's twitch (±0.4 mrad/s) the identified model still says "at rest".
 
     The excitation passes through zero speed in a sample or two, and its fit closed the
-    band at 0.2–0.4 mrad/s: with it the observer read a resting wrist's twitch as full
+    band at 0.2–0.5 mrad/s: with it the observer read a resting wrist's twitch as full
     Coulomb friction, ±τ_C square waves at the dither's 15 Hz (docs/active_mode_log.md,
     *An identified model's rest band*). The prior's band is the narrowest it may be.
     """

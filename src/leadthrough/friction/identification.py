@@ -22,7 +22,7 @@ Per joint, from the logs where that joint moved:
    to the slow samples with τ_C and c held, and may widen the prior's rest band but not
    narrow it (B and A B at least the prior's): an excitation passes through zero speed in
    a sample or two and never dithers, so its data cannot say how slow a joint must be to
-   rest, and a band fitted to them closed at 0.2–0.4 mrad/s, where a dithered joint at
+   rest, and a band fitted to them closed at 0.2–0.5 mrad/s, where a dithered joint at
    rest twitches (the prior, the thesis' Table 4.1 for the YuMi: 2–3 mrad/s);
 6. the level's relative error (``relative_error``): 3 std of τ_C plus the largest
    deviation of the level measured along the travel, up and down strokes compared at the
