@@ -467,8 +467,8 @@ def _fit_sigmoids(
     from scipy import optimize  # at call time: scipy.optimize takes 0.15 s to import
 
     prior_slope, prior_width = prior
-    # log (A B) and log B: A within [50, 1e5] s/rad and B within [1e-5, 0.05] rad/s, as
-    # before the floor, each at least the prior's
+    # log (A B) and log B: A B within [50 · 1e-5, 1e5 · 0.05] and B within [1e-5, 0.05]
+    # rad/s (the ranges of A [s/rad] and B before the floor), each at least the prior's
     low = np.log([max(prior_slope * prior_width, 50.0 * 1e-5), max(prior_width, 1e-5)])
     high = np.maximum(np.log([1e5 * 0.05, 0.05]), low + 1e-6)
     start = np.clip(np.log([prior_slope * prior_width, prior_width]), low + 1e-9, high - 1e-9)
