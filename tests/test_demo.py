@@ -29,6 +29,12 @@ def test_demo_writes_a_report_with_figures_and_replays_accurately(tmp_path, caps
     )
     assert ratio < 1.0
     assert taught <= 1.5 * passive
+    # and action by action: no part of the session (a line, a circle, a press on the
+    # table, a lift) shakes more than 1.5x what passive mode does over the same action
+    rows = re.findall(r"^\| ([a-z][^|]+) \| ([\d.]+) \| ([\d.]+) \|", report, re.M)
+    assert len(rows) == 4
+    for label, active_mm_s, passive_mm_s in rows:
+        assert float(active_mm_s) <= 1.5 * float(passive_mm_s), label
 
 
 def test_teach_then_replay_from_the_command_line(tmp_path, capsys):

@@ -10,7 +10,13 @@ import pytest
 
 import leadthrough as lt
 from leadthrough.errors import ParameterError
-from leadthrough.experiments.guiding import Case, release_figures, run_case, tool_vibration
+from leadthrough.experiments.guiding import (
+    Case,
+    release_figures,
+    run_case,
+    tool_vibration,
+    vibration_within,
+)
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.twin.dry_friction import DryFrictionParameters
 from leadthrough.twin.operator import TorqueProfile, step
@@ -159,6 +165,25 @@ def test_vibration_keeps_what_is_above_4_hz():
     slow = 0.1 * np.sin(2 * np.pi * 0.5 * t) * np.array([[0.0, 1.0, 0.0]])
     assert tool_vibration(fast, dt) == pytest.approx(0.01 / np.sqrt(2.0), rel=0.03)
     assert tool_vibration(slow, dt) < 0.02 * 0.1
+
+
+def test_vibration_within_windows_reads_each_windows_shaking():
+    """A 12 Hz shake in the second half only: that window reads A/√2, the first nearly 0.
+
+    One window over the whole run reads what :func:`tool_vibration` reads.
+    """
+    dt = 0.004
+    t = np.arange(0.0, 6.0, dt)
+    second = t >= 3.0
+    slow = 0.1 * np.sin(2 * np.pi * 0.5 * t)[:, None] * np.array([[0.0, 1.0, 0.0]])
+    shake = np.where(second, 0.01 * np.sin(2 * np.pi * 12.0 * t), 0.0)
+    velocity = slow + shake[:, None] * np.array([[1.0, 0.0, 0.0]])
+    first_half, second_half = vibration_within(velocity, dt, [~second, second])
+    assert second_half == pytest.approx(0.01 / np.sqrt(2.0), rel=0.05)
+    assert first_half < 0.1 * second_half
+    whole = vibration_within(velocity, dt, [np.ones_like(second)])
+    assert whole[0] == pytest.approx(tool_vibration(velocity, dt), rel=1e-12)
+    assert np.isnan(vibration_within(velocity, dt, [np.zeros_like(second)])[0])
 
 
 def test_stop_time_counts_motion_not_the_dither_twitch():

@@ -18,7 +18,7 @@ import numpy as np
 
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.experiments.friction_study import run_friction_study
-from leadthrough.experiments.guiding import tool_vibration
+from leadthrough.experiments.guiding import tool_vibration, vibration_within
 from leadthrough.experiments.teach import RecordingController, replay_recording
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
@@ -129,20 +129,64 @@ def path_smoothness(taught: SimulationResult, actions: list[Action]) -> dict[str
     """How smooth the taught tool path is, against the path the operator meant [m/s].
 
     ``taught``: RMS tool velocity above 4 Hz (:func:`~.guiding.tool_vibration`) over the
-    session; ``intended``: the same figure of the hands' own paths (each action's path
-    rebuilt from where the flange was when it began, zero between actions); ``speed``:
-    the RMS tool speed, for scale.
+    session; ``intended``: the same figure of the hands' own paths (:func:`intended_velocity`);
+    ``speed``: the RMS tool speed, for scale.
     """
     dt = float(taught.t[1] - taught.t[0])
     velocity = np.gradient(taught.flange_position, dt, axis=0)
-    intended = np.zeros_like(velocity)
+    intended = intended_velocity(taught, actions)
+    return {"taught": tool_vibration(velocity, dt), "intended": tool_vibration(intended, dt),
+            "speed": float(np.sqrt(np.mean(np.sum(velocity**2, axis=1))))}  # fmt: skip
+
+
+def intended_velocity(run: SimulationResult, actions: list[Action]) -> FloatArray:
+    """The velocity of the paths the hands followed [m/s], (N, 3), zero between actions.
+
+    Each action's path rebuilt from where the flange was when it began (an action that
+    turns a joint, not a hand on the tool, has no path: zero).
+    """
+    intended = np.zeros_like(run.flange_position)
     for action in actions:
-        during = np.flatnonzero((taught.t >= action.start) & (taught.t < action.stop))
+        during = np.flatnonzero((run.t >= action.start) & (run.t < action.stop))
         if during.size == 0:
             continue
         first = during[0]
-        operator = action.make(taught.flange_position[first], taught.q_true[first])
+        operator = action.make(run.flange_position[first], run.q_true[first])
         if isinstance(operator, Hand):  # a hand on the tool (not one turning a joint)
-            intended[during] = operator.path.velocity(taught.t[during] - action.start)
-    return {"taught": tool_vibration(velocity, dt), "intended": tool_vibration(intended, dt),
-            "speed": float(np.sqrt(np.mean(np.sum(velocity**2, axis=1))))}  # fmt: skip
+            intended[during] = operator.path.velocity(run.t[during] - action.start)
+    return intended
+
+
+@dataclass(frozen=True)
+class ActionFigures:
+    """How one action of a session went: its smoothness and the hand's effort.
+
+    Attributes:
+        label: What the hand did.
+        vibration: RMS tool velocity above 4 Hz over the action [m/s]
+            (:func:`~.guiding.vibration_within`, filtered over the whole session).
+        intended: The same of the path the hand followed [m/s].
+        force: RMS hand force over the action [N].
+    """
+
+    label: str
+    vibration: float
+    intended: float
+    force: float
+
+
+def figures_by_action(run: SimulationResult, actions: list[Action]) -> list[ActionFigures]:
+    """:class:`ActionFigures` of each action of ``run``, in the order of ``actions``.
+
+    Where in a session the taught path is not smooth: a press's impact on a table shakes
+    the tool whatever guides it, a line should not.
+    """
+    dt = float(run.t[1] - run.t[0])
+    windows = [(run.t >= action.start) & (run.t < action.stop) for action in actions]
+    velocity = np.gradient(run.flange_position, dt, axis=0)
+    taught = vibration_within(velocity, dt, windows)
+    intended = vibration_within(intended_velocity(run, actions), dt, windows)
+    force = [float(np.sqrt(np.mean(run.operator_force[w] ** 2))) if np.any(w) else np.nan
+             for w in windows]  # fmt: skip
+    return [ActionFigures(action.label, float(a), float(b), f)
+            for action, a, b, f in zip(actions, taught, intended, force, strict=True)]  # fmt: skip

@@ -8,6 +8,7 @@ import numpy as np
 
 from leadthrough.experiments.demo import (
     DemoResult,
+    figures_by_action,
     hand_force_rms,
     path_smoothness,
     teaching_actions,
@@ -157,7 +158,10 @@ observer in the loop): RMS {passive_force:.2f} N, peak {result.passive.operator_
 Smoothness of the taught path: tool velocity above 4 Hz, RMS over the session,
 **{1e3 * smooth["taught"]:.1f} mm/s** against {1e3 * smooth["intended"]:.1f} mm/s in the
 paths the operator's hand followed (RMS tool speed {1e3 * smooth["speed"]:.0f} mm/s);
-passive mode {1e3 * passive["taught"]:.1f} mm/s.
+passive mode {1e3 * passive["taught"]:.1f} mm/s. Action by action (the same figures over
+each action's time; hand force RMS over it):
+
+{_action_table(result, robot)}
 
 ## Supervisor events
 | t [s] | kind | detail |
@@ -166,6 +170,20 @@ passive mode {1e3 * passive["taught"]:.1f} mm/s.
 
 Wall time: {seconds}. Friction identified first and saved to `friction.toml`.
 """
+
+
+def _action_table(result: DemoResult, robot: RobotDescription) -> str:
+    """Smoothness and effort of each action, active against passive (Markdown table)."""
+    actions = teaching_actions(robot)
+    active = figures_by_action(result.taught, actions)
+    passive = figures_by_action(result.passive, actions)
+    rows = [f"| {a.label} | {1e3 * a.vibration:.1f} | {1e3 * p.vibration:.1f} | "
+            f"{1e3 * a.intended:.2f} | {a.force:.1f} | {p.force:.1f} |"
+            for a, p in zip(active, passive, strict=True)]  # fmt: skip
+    header = ("| what the hand did | above 4 Hz, active [mm/s] | passive [mm/s] | "
+              "the hand's path [mm/s] | hand force, active [N] | passive [N] |\n"
+              "|---|---:|---:|---:|---:|---:|")  # fmt: skip
+    return "\n".join([header, *rows])
 
 
 def _estimation_rms(result: DemoResult) -> float:

@@ -68,6 +68,8 @@ FIGURES = {
 DITHER_JOINTS = (0, 3, 5)
 #: The observers of the tables, in their columns' order.
 OBSERVER_COLUMNS = ("kalman_time_varying", "kalman_two_level", "classical")
+#: The demo's actions (``demo.teaching_actions``, in order) as the README's numbers name them.
+DEMO_ACTIONS = ("line", "circle", "press", "lift")
 
 
 def _f(value: float, digits: int = 2) -> str:
@@ -193,6 +195,7 @@ def _identify(robot: RobotDescription, seed: int, random_friction: bool) -> Fric
 
 def _demo(robot: RobotDescription, out: Path, numbers: dict[str, str]) -> Path:
     from leadthrough.experiments.demo import (
+        figures_by_action,
         hand_force_rms,
         path_smoothness,
         run_demo,
@@ -217,6 +220,14 @@ def _demo(robot: RobotDescription, out: Path, numbers: dict[str, str]) -> Path:
     numbers |= {f"demo.vibration_{key}_mm_s": _f(1e3 * value) for key, value in smooth.items()}
     passive = path_smoothness(result.passive, teaching_actions(robot))["taught"]
     numbers["demo.vibration_passive_mm_s"] = _f(1e3 * passive)
+    actions = teaching_actions(robot)
+    by_action = zip(DEMO_ACTIONS, figures_by_action(sim, actions),
+                    figures_by_action(result.passive, actions), strict=True)  # fmt: skip
+    for name, active_figures, passive_figures in by_action:
+        numbers[f"demo.{name}.vibration_mm_s"] = f"{1e3 * active_figures.vibration:.1f}"
+        numbers[f"demo.{name}.passive_vibration_mm_s"] = f"{1e3 * passive_figures.vibration:.1f}"
+        numbers[f"demo.{name}.force_n"] = f"{active_figures.force:.1f}"
+        numbers[f"demo.{name}.passive_force_n"] = f"{passive_figures.force:.1f}"
     return out / "friction.toml"
 
 

@@ -410,6 +410,17 @@ def tool_vibration(velocity: FloatArray, dt: float) -> float:
     return _rms_norm(_split(velocity, dt, "highpass"))
 
 
+def vibration_within(velocity: FloatArray, dt: float, windows: Sequence[BoolArray]) -> FloatArray:
+    """:func:`tool_vibration` within each window of samples [m/s], NaN for an empty one.
+
+    The velocity (N, 3) is filtered over the whole run, then each window (a boolean mask
+    of N samples) is read: a window's edges do not ring as filtering it alone would.
+    """
+    high = _split(velocity, dt, "highpass")
+    return np.array([_rms_norm(high[window]) if np.any(window) else np.nan
+                     for window in windows])  # fmt: skip
+
+
 def _rms_norm(vectors: FloatArray) -> float:
     """RMS over samples of the vectors' norm, ``√mean |v|²`` (rows: samples)."""
     return float(np.sqrt(np.mean(np.sum(vectors**2, axis=1))))
@@ -432,10 +443,9 @@ def vibration_windows(
     factory = controller_factory or default_factory
     held, _ = _run(robot, case, mode, factory, np.inf, path.duration + HOLD)
     dt = float(held.t[1] - held.t[0])
-    high = _split(np.gradient(held.flange_position, dt, axis=0), dt, "highpass")
     starts = np.arange(0.0, held.t[-1], window)
-    rms = [_rms_norm(high[(held.t >= a) & (held.t < a + window)]) for a in starts]
-    return starts, np.array(rms)
+    windows = [(held.t >= a) & (held.t < a + window) for a in starts]
+    return starts, vibration_within(np.gradient(held.flange_position, dt, axis=0), dt, windows)
 
 
 #: A joint is loaded when the operator's true torque on it exceeds this share of its
