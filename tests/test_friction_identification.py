@@ -10,6 +10,7 @@ from leadthrough.friction.logs import LogFileError, load_logs, save_logs
 from leadthrough.runtime.excitation import ExcitationRun, friction_experiment
 from leadthrough.trajectories import triangular_velocity
 from leadthrough.twin.friction import randomized_friction
+from leadthrough.twin.model_error import ModelError
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig
 
 
@@ -122,6 +123,44 @@ def test_the_fit_widens_a_rest_band_the_data_show_wider():
     speeds = np.array([[0.0], [0.005], [0.01], [0.02]])
     np.testing.assert_allclose(fitted.std(speeds), wide.std(speeds), atol=0.15)
     np.testing.assert_allclose(fitted.mean(speeds), wide.mean(speeds), atol=0.15)
+
+
+def test_a_gravity_model_error_is_not_friction_noise(default_study, yumi):
+    """Every link 10 % heavier than the model: σ stays the friction's, the levels true.
+
+    A gravity model's error does not change sign with the motion; friction does. The fit
+    takes off a torque offset and, where a joint moved alone, the first harmonic of its
+    angle (the form of a gravity torque about its axis) before σ, which the controller's
+    bands are made of. Fitted as friction, the 10 % error read as σ = 0.05–0.15 Nm on
+    joints 1–4, 3–14× the exact twin's 0.006–0.016 Nm, and moved levels by up to 1.2 %.
+    """
+    heavy = run_friction_study(
+        yumi, twin_config=TwinConfig(model_error=ModelError(mass_scale=1.1)), progress=False
+    )
+    exact = default_study.model.noise_std
+    assert np.all(heavy.model.noise_std <= 1.25 * exact + 0.001), (heavy.model.noise_std, exact)
+    assert np.all(np.abs(heavy.errors()[0]) < 0.005), heavy.errors()[0]
+
+
+def test_a_joint_that_slid_one_way_keeps_its_whole_level(yumi):
+    """One way only, an offset is the level: the fit keeps it all as friction.
+
+    Joint 7 turns one way at 0.1–0.4 rad/s with τ_C = 0.4 Nm and c = 0.2 Nm s/rad (the
+    rigid body exact). A torque offset and ``sign(q̇) τ_C`` are then the same column, and
+    fitted together the level came out at 4·10⁷ Nm; the offset and the harmonic are fitted
+    only for a joint that slid both ways (``BOTH_WAYS`` of its samples each).
+    """
+    dynamics, dt, joint = lt.Dynamics(yumi), 0.004, 6
+    t = np.arange(0.0, 8.0, dt)
+    speed = 0.1 + 0.3 * np.sin(np.pi * t / 4.0) ** 2
+    q, qd, qdd = np.tile(yumi.home(), (t.size, 1)), np.zeros((t.size, 7)), np.zeros((t.size, 7))
+    q[:, joint], qd[:, joint] = -1.5 + np.cumsum(speed) * dt, speed
+    qdd[:, joint] = np.gradient(speed, dt)
+    tau = np.array([dynamics.inverse_dynamics(*sample) for sample in zip(q, qd, qdd, strict=True)])
+    tau[:, joint] += 0.4 + 0.2 * speed
+    model, _ = identify_friction([{"t": t, "q": q, "qd": qd, "tau": tau}], dynamics, [joint])
+    assert model.coulomb[joint] == pytest.approx(0.4, rel=0.02)
+    assert model.viscous[joint] == pytest.approx(0.2, rel=0.02)
 
 
 def test_report_carries_fit_quality(default_study):

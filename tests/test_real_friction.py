@@ -112,9 +112,11 @@ def test_the_level_error_is_what_the_level_misstates_along_the_travel(ur10e_dyna
     """relative_error covers what one level mis-states along a sweep, gravity error aside.
 
     The sweep's level moves ±15 % with the angle; the error covers the sliding friction's
-    deviation from the model's and is not uselessly wider. A gravity error of 1.5 Nm widens
-    it by less than 0.05 (only through the std of τ_C): the up and down strokes at the same
-    position cancel it, where the residual's spread would have made the error 0.5.
+    deviation from the model's and is not uselessly wider. A gravity error of 1.5 Nm, a first
+    harmonic of the angle as gravity about a joint that moves alone is, leaves it as it was
+    (to 0.005): the fit takes what does not change sign with the motion off first (before,
+    it widened the error by up to 0.05 through the std of τ_C), and the up and down strokes
+    at the same position cancel it, where the residual's spread would have made it 0.5.
     """
     level = lambda q: 2.0 * (1.0 + 0.15 * np.sin(2.0 * q + 0.7))  # noqa: E731
     gravity_error = lambda q: 1.5 * np.cos(q)  # noqa: E731
@@ -128,7 +130,7 @@ def test_the_level_error_is_what_the_level_misstates_along_the_travel(ur10e_dyna
     off = np.abs(level(q) + 3.0 * speed - modelled - model.viscous[0] * speed) / modelled
     error = model.relative_error[0]
     assert np.mean(off <= error) >= 0.95 and error <= off.max() + 0.05, (error, off.max())
-    assert 0.0 <= error - clean.relative_error[0] < 0.05
+    assert abs(error - clean.relative_error[0]) < 0.005
     assert 0.1 < report.level_error[0] < 0.2
 
 

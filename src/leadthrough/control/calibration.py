@@ -448,13 +448,19 @@ class Calibration:
         Args:
             nominal: The model before the calibration.
             accuracy: Relative error of the measured levels away from the pose [–]; the
-                joints that slid then carry ``min(nominal error + reading error, accuracy)``:
-                the model's level along the travel, rescaled by one reading, is off by what
-                the model's shape is plus what the reading is (:attr:`coulomb_spread` over
-                the level read). With ``min(nominal error, accuracy)``, before, an
-                identified model's small error stood under a level the reading set (the
-                observer's band covered 86–89 % of the moving samples on plants whose
-                friction was identified first). None keeps the nominal errors.
+                joints that slid then carry ``min(nominal error + reading error +
+                |friction_scale − 1|, accuracy)``: the model's level along the travel,
+                rescaled by one reading, is off by what the model's shape is, plus what the
+                reading is (:attr:`coulomb_spread` over the level read), plus how far the
+                reading moved it. One reading cannot tell a level that changed everywhere
+                (the rescale is right elsewhere) from a model whose shape is off at the pose
+                (an identified model read beyond the stroke it was fitted on: the rescale
+                is then as wrong elsewhere as it moved the level; traced on a plant whose
+                identified level, rescaled by 10 % at the pose, stood 16 % over the plant's
+                inside the stroke against a stated 7 %). With ``min(nominal error,
+                accuracy)``, before, an identified model's small error stood under a level
+                the reading set (the observer's band covered 86–89 % of the moving samples on
+                plants whose friction was identified first). None keeps the nominal errors.
 
         A refused calibration gives ``nominal`` back, its errors widened where it read a
         level below the model's (:meth:`lowered`).
@@ -467,7 +473,8 @@ class Calibration:
                 nominal.relative_error, 1.0 - lowered))  # fmt: skip
         error = nominal.relative_error
         if accuracy is not None and self.measured is not None:
-            reading = self.reading_error(nominal)
+            moved = np.abs(self.friction_scale - 1.0)  # how far the reading moved the level
+            reading = self.reading_error(nominal) + moved
             error = np.where(self.measured, np.minimum(error + reading, accuracy), error)
         return dataclasses.replace(nominal, coulomb=nominal.coulomb * self.friction_scale,
                                    relative_error=error)  # fmt: skip

@@ -15,7 +15,11 @@ Per joint, from the logs where that joint moved:
    the sliding samples cover (``u`` = ±1 at its ends), the model holds its end values
    beyond it (a quadratic fitted to 45 % of a range and extrapolated over the rest read
    a level 2.2× too high, or below zero on a single sweep of a ±2π joint), and the level
-   is constrained to stay above ``MIN_LEVEL`` τ_C over the stroke, so everywhere;
+   is constrained to stay above ``MIN_LEVEL`` τ_C over the stroke, so everywhere. The
+   same least squares fits what does not change sign with the motion, a torque offset and
+   the first harmonic of the joint's angle where it moved alone (:func:`unsigned_basis`: a
+   gravity model's error), and takes it off every sample of the joint, so that it neither
+   biases the level nor counts as friction noise;
 4. the noise σ is the standard deviation of the sliding residual (the thesis' "variance
    of the friction torque at high velocities");
 5. the sigmoid slope A and half-width B are fitted (SciPy ``least_squares``, robust loss)
@@ -41,6 +45,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from leadthrough.errors import LeadthroughError
 from leadthrough.filters import low_pass_signal, pole
@@ -55,6 +60,9 @@ MIN_RELATIVE_ERROR = 0.03
 #: A fitted position-dependent Coulomb level stays above this fraction of its value at the
 #: stroke's middle over the stroke, and so everywhere (no joint loses its friction).
 MIN_LEVEL = 0.1
+#: Each direction's least share of a joint's sliding samples for the fit to separate what
+#: does not change sign with the motion (:func:`unsigned_basis`) from friction [–].
+BOTH_WAYS = 0.25
 
 
 class IdentificationError(LeadthroughError, ValueError):
@@ -335,10 +343,17 @@ def _fit_joint(
     low, high = span.min(), span.max()
     mid, half = 0.5 * (low + high), 0.5 * (high - low)
     u = (q - mid) / half
-    theta, std, residual = _fit_sliding(qd[sliding], u[sliding], tau[sliding], with_position)
+    # only a joint that slid both ways tells what changes sign with the motion from what
+    # does not; one that turned one way keeps it all as friction, as before
+    both_ways = min(np.mean(qd[sliding] > 0.0), np.mean(qd[sliding] < 0.0)) >= BOTH_WAYS
+    unsigned = unsigned_basis(q, samples.moved[mine].sum(axis=1) == 1)[:, : 3 * both_ways]
+    theta, std, residual, offset = _fit_sliding(qd[sliding], u[sliding], tau[sliding],
+                                                with_position, unsigned[sliding])  # fmt: skip
     if with_position and not theta[0] > 3.0 * std[0]:  # no level the data resolve to scale by
         with_position = False
-        theta, std, residual = _fit_sliding(qd[sliding], u[sliding], tau[sliding], False)
+        theta, std, residual, offset = _fit_sliding(qd[sliding], u[sliding], tau[sliding],
+                                                    False, unsigned[sliding])  # fmt: skip
+    tau = tau - unsigned @ offset  # what does not change sign with the motion is not friction
     coulomb, viscous = theta[0], theta[-1]
     values["coulomb"][j], values["viscous"][j] = coulomb, max(viscous, 0.0)
     values["noise_std"][j] = float(np.std(residual))
@@ -378,10 +393,30 @@ def _level(values: dict[str, FloatArray], j: int, u: FloatArray) -> FloatArray:
                                    + values["position_quadratic"][j] * u**2)  # fmt: skip
 
 
+def unsigned_basis(q: FloatArray, alone: NDArray[np.bool_]) -> FloatArray:
+    """What a joint's torque holds besides friction, not changing sign with it, (N, 3).
+
+    ``1, sin q, cos q``: a torque offset is a constant, and where the joint moved alone
+    (``alone``: in a log where no other joint moved, as the project's excitation does,
+    ``runtime/excitation.py``) the gravity torque about its axis is a first harmonic of its
+    angle (the distal links' centre of mass turns on a circle about the axis), so a
+    model's error in it is too. Where other joints moved as well that form does not hold,
+    and only the constant stands.
+    """
+    return np.column_stack([np.ones_like(q), np.sin(q) * alone, np.cos(q) * alone])
+
+
 def _fit_sliding(
-    qd: FloatArray, u: FloatArray, tau: FloatArray, with_position: bool
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Least squares of ``τ = sign(q̇) (a₀ + a₁ u + a₂ u²) + c q̇``: θ, std(θ), residual.
+    qd: FloatArray, u: FloatArray, tau: FloatArray, with_position: bool, unsigned: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Least squares of ``τ = sign(q̇) (a₀ + a₁ u + a₂ u²) + c q̇ + unsigned · b``.
+
+    Friction has the sign of the motion; what does not change sign with it is not
+    friction: the rigid-body model's error along the stroke (a gravity term off by the
+    masses' few per cent, newton-metres on a loaded shoulder) and an offset of the torque
+    measurement. ``unsigned`` (N, k) holds its basis (:func:`unsigned_basis`), so that it
+    neither biases the level nor counts as friction noise (σ, which the controller's bands
+    are made of).
 
     Friction dissipates, so the Coulomb level and the viscous coefficient are bounded
     below by 0 (where the rigid-body model is poor, a nominal URDF, an unconstrained fit
@@ -389,14 +424,18 @@ def _fit_sliding(
     ``MIN_LEVEL`` of its value at the stroke's middle over u ∈ [−1, 1], the stroke the
     samples cover; the model holds its end values beyond it, so the level is positive at
     every position.
+
+    Returns:
+        θ (``a₀[, a₁, a₂], c``), std(θ), the residual, and ``b``.
     """
     from scipy import optimize  # at call time: keeps `import leadthrough` fast
 
     sign = np.sign(qd)
     columns = [sign, sign * u, sign * u * u, qd] if with_position else [sign, qd]
-    design = np.column_stack(columns)
+    k = len(columns)  # the friction's columns; the offset's follow
+    design = np.column_stack([*columns, unsigned])
     lower = np.full(design.shape[1], -np.inf)
-    lower[[0, -1]] = 0.0
+    lower[[0, k - 1]] = 0.0
     theta = optimize.lsq_linear(design, tau, bounds=(lower, np.inf)).x
     if with_position:
         # a₀ + a₁u + a₂u² > MIN_LEVEL a₀  ⇔  1 + k₁'u + k₂'u² > 0 with k' = a / ((1 − MIN_LEVEL) a₀)
@@ -406,24 +445,31 @@ def _fit_sliding(
     residual = tau - design @ theta
     dof = max(len(tau) - len(theta), 1)
     covariance = np.linalg.pinv(design.T @ design) * (residual @ residual) / dof
-    return theta, np.sqrt(np.diag(covariance)), residual
+    return theta[:k], np.sqrt(np.diag(covariance))[:k], residual, theta[k:]
 
 
 def _level_bounded_fit(design: FloatArray, tau: FloatArray, start: FloatArray) -> FloatArray:
-    """Least squares with ``a₀ + a₁ u + a₂ u² ≥ MIN_LEVEL a₀`` on a fine grid of u ∈ [−1, 1]."""
+    """Least squares with ``a₀ + a₁ u + a₂ u² ≥ MIN_LEVEL a₀`` on a fine grid of u ∈ [−1, 1].
+
+    ``design``'s columns: the level's three, the viscous one, then the offset's.
+    """
     from scipy import optimize
 
     grid = np.linspace(-1.0, 1.0, 81)
-    rows = np.column_stack([np.full_like(grid, 1.0 - MIN_LEVEL), grid, grid**2, 0.0 * grid])
+    rows = np.zeros((grid.size, design.shape[1]))
+    rows[:, :3] = np.column_stack([np.full_like(grid, 1.0 - MIN_LEVEL), grid, grid**2])
     hessian, gradient = design.T @ design, design.T @ tau
     scale = float(np.trace(hessian)) or 1.0
-    level = max(float(start[0]), 1e-9)
-    initial = np.array([level, 0.0, 0.0, max(float(start[-1]), 0.0)])
+    initial = np.array(start, dtype=float)  # the level alone, and the offset as fitted
+    initial[0], initial[1:3] = max(float(start[0]), 1e-9), 0.0
+    initial[3] = max(float(start[3]), 0.0)
+    bounds = [(0.0, None), (None, None), (None, None), (0.0, None)]
+    bounds += [(None, None)] * (design.shape[1] - 4)
     fit = optimize.minimize(
         lambda x: (x @ hessian @ x - 2.0 * gradient @ x) / scale,
         initial,
         jac=lambda x: 2.0 * (hessian @ x - gradient) / scale,
-        bounds=[(0.0, None), (None, None), (None, None), (0.0, None)],
+        bounds=bounds,
         constraints=[{"type": "ineq", "fun": lambda x: rows @ x, "jac": lambda x: rows}],
         method="SLSQP",
         options={"maxiter": 200, "ftol": 1e-12},
