@@ -216,11 +216,11 @@ def _demo(robot: RobotDescription, out: Path, numbers: dict[str, str]) -> Path:
         "demo.force_rms_n": _f(hand_force_rms(sim)),
         "demo.passive_force_rms_n": _f(hand_force_rms(result.passive)),
     }
-    smooth = path_smoothness(sim, teaching_actions(robot))
-    numbers |= {f"demo.vibration_{key}_mm_s": _f(1e3 * value) for key, value in smooth.items()}
-    passive = path_smoothness(result.passive, teaching_actions(robot))["taught"]
-    numbers["demo.vibration_passive_mm_s"] = _f(1e3 * passive)
     actions = teaching_actions(robot)
+    smooth = path_smoothness(sim, actions)
+    numbers |= {f"demo.vibration_{key}_mm_s": _f(1e3 * value) for key, value in smooth.items()}
+    passive = path_smoothness(result.passive, actions)["taught"]
+    numbers["demo.vibration_passive_mm_s"] = _f(1e3 * passive)
     by_action = zip(DEMO_ACTIONS, figures_by_action(sim, actions),
                     figures_by_action(result.passive, actions), strict=True)  # fmt: skip
     for name, active_figures, passive_figures in by_action:

@@ -346,7 +346,9 @@ def _fit_joint(
     # only a joint that slid both ways tells what changes sign with the motion from what
     # does not; one that turned one way keeps it all as friction, as before
     both_ways = min(np.mean(qd[sliding] > 0.0), np.mean(qd[sliding] < 0.0)) >= BOTH_WAYS
-    unsigned = unsigned_basis(q, samples.moved[mine].sum(axis=1) == 1)[:, : 3 * both_ways]
+    unsigned = unsigned_basis(q, samples.moved[mine].sum(axis=1) == 1)
+    if not both_ways:
+        unsigned = unsigned[:, :0]  # no column: all of it stays friction
     theta, std, residual, offset = _fit_sliding(qd[sliding], u[sliding], tau[sliding],
                                                 with_position, unsigned[sliding])  # fmt: skip
     if with_position and not theta[0] > 3.0 * std[0]:  # no level the data resolve to scale by
