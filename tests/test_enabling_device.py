@@ -18,6 +18,7 @@ import leadthrough as lt
 from leadthrough.control.active_law import _REST_DAMPING, ActiveLaw
 from leadthrough.control.admittance import AdmittanceState
 from leadthrough.experiments.guiding import Case, run_case
+from leadthrough.friction.compensation import CoulombCompensationParameters, compensation_ceiling
 from leadthrough.friction.model import FrictionModel
 from leadthrough.twin.operator import During, Hand, Operator
 from leadthrough.twin.paths import Line
@@ -196,6 +197,78 @@ def test_held_without_a_calibration_the_law_keeps_its_margin(yumi):
     assert ctl.law.enabling is None and np.all(ctl.law.margin_error > 0.0)
     ctl.step(lt.JointState(0.004, q, qd, None, enabling=False))
     assert ctl.law.enabling is False  # released counts, calibrated or not
+
+
+def _sliding_compensation(robot, mode, enabling, held_fraction=1.0, periods=50):
+    """Coulomb compensation [Nm] of every joint sliding at home, and its ceiling [Nm].
+
+    The controller is taken as calibrated, so that a held device counts, on levels known to
+    5 % and an exact gravity model: the ceiling, 0.95 τ_C, is above the thesis' 0.7 τ_C.
+    """
+    parameters = lt.LeadThroughParameters(mode=mode, mass_uncertainty=0.0,
+                                          drive_gain_uncertainty=0.0)  # fmt: skip
+    compensation = dataclasses.replace(parameters.compensation, held_fraction=held_fraction)
+    parameters = dataclasses.replace(parameters, compensation=compensation)
+    nominal = FrictionModel.from_robot(robot)
+    known = dataclasses.replace(nominal, relative_error=np.full(robot.n_joints, 0.05))
+    ctl = lt.LeadThrough(robot, friction=known, parameters=parameters)
+    q, qd = robot.home(), np.full(robot.n_joints, 0.05)
+    for k in range(periods):
+        ctl.step(lt.JointState(0.004 * k, q, qd, None, enabling=enabling))
+    level = ctl.friction.coulomb_level(q)
+    gravity_error = ctl.parameters.gravity_uncertainty * np.abs(ctl.model.gravity)
+    ceiling = compensation_ceiling(level, ctl.feed_forward.friction_error, gravity_error)
+    return ctl.last_feed_forward.friction, level, ceiling
+
+
+@pytest.fixture
+def taken_as_calibrated(monkeypatch):
+    """Every controller of the test counts as calibrated (a held device then counts)."""
+    monkeypatch.setattr(lt.LeadThrough, "_calibrated", property(lambda ctl: True))
+
+
+def test_held_active_mode_compensates_the_friction_surely_there(yumi, taken_as_calibrated):
+    """Held: ``held_fraction`` (1) of τ_C under the ceiling; else the thesis' ε = 0.7."""
+    held, level, ceiling = _sliding_compensation(yumi, "active", True)
+    np.testing.assert_allclose(held, np.minimum(level, ceiling), rtol=1e-4, atol=1e-9)
+    for enabling in (None, False):  # no device; released (the controller sends gravity alone)
+        other, _, _ = _sliding_compensation(yumi, "active", enabling)
+        np.testing.assert_allclose(other, np.minimum(0.7 * level, ceiling), rtol=1e-4,
+                                   atol=1e-9)  # fmt: skip
+    assert np.all(held > 0.9 * level)  # the case is one where it differs
+
+
+def test_held_passive_mode_keeps_the_thesis_law(yumi, taken_as_calibrated):
+    """Passive mode is the thesis' law (the benchmark's reference), device or not."""
+    held, level, ceiling = _sliding_compensation(yumi, "passive", True)
+    np.testing.assert_allclose(held, np.minimum(0.7 * level, ceiling), rtol=1e-4, atol=1e-9)
+
+
+def test_held_fraction_none_keeps_the_thesis_fraction(yumi, taken_as_calibrated):
+    """``held_fraction = None``: ε is ``fraction`` whatever the device says."""
+    held, _, _ = _sliding_compensation(yumi, "active", True, held_fraction=None)
+    thesis, _, _ = _sliding_compensation(yumi, "active", None)
+    np.testing.assert_allclose(held, thesis, atol=1e-12)
+
+
+@pytest.mark.parametrize("value", [-0.1, 1.2, np.nan, "all"])
+def test_a_held_fraction_outside_0_1_is_refused(value):
+    """A fraction of τ_C: a number in [0, 1], or a one-line error naming the field."""
+    with pytest.raises(lt.ParameterError, match="held_fraction"):
+        CoulombCompensationParameters(held_fraction=value)
+
+
+def test_held_the_thesis_fraction_costs_effort(released_with_the_device):
+    """As found: ε = 0.7 kept while held; the same hand pulls harder, the arm stops alike."""
+    parameters = lt.LeadThroughParameters()
+    thesis = dataclasses.replace(parameters, compensation=dataclasses.replace(
+        parameters.compensation, held_fraction=None))  # fmt: skip
+
+    def factory(robot, mode):
+        return lt.LeadThrough(robot, mode=mode, parameters=thesis, calibrate=True)
+
+    kept = run_case(RELEASED_ON_THE_WAY, "active", factory)
+    assert released_with_the_device.rms_force <= 0.9 * kept.rms_force
 
 
 @pytest.mark.parametrize("mode", ["passive", "active"])

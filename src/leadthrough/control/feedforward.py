@@ -201,6 +201,11 @@ class PassiveFeedForward:
         self._no_push = np.zeros(n)
         self._no_active = np.zeros(n, dtype=bool)
 
+    def use_fraction(self, fraction: float) -> None:
+        """Compensate ``fraction`` of τ_C from the next period on (ε [–], under the ceiling)."""
+        self.compensation.fraction = fraction
+        self._scalars[_FRACTION] = fraction
+
     def reset(self) -> None:
         """Forget filter, dither and delay-line states."""
         self.compensation.reset()
@@ -313,6 +318,7 @@ def dither_within(dither: FloatArray, ceiling: FloatArray) -> FloatArray:
 FEED_FORWARD_SCALARS = ("moving_velocity", "rest_time", "park_time", "dt", "dead_band",
                         "fraction", "full_velocity", "pole", "gravity_uncertainty",
                         "slow_pole", "creep", "limit_zone")  # fmt: skip
+_FRACTION = FEED_FORWARD_SCALARS.index("fraction")
 
 
 @kernel

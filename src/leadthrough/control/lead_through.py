@@ -626,7 +626,9 @@ class LeadThrough:
     ) -> tuple[FloatArray, FloatArray]:
         """The guiding command [Nm] and the dither it holds [Nm]."""
         q, qd = model.q, model.qd
-        self.law.use_enabling(self._law_enabling())
+        enabling = self._law_enabling()
+        self.law.use_enabling(enabling)
+        self.feed_forward.use_fraction(self._compensated_fraction(enabling))
         if self.level_error is not None:
             self._follow_level_error(q)
         applied, dither = self._measured(tau_measured)
@@ -669,6 +671,20 @@ class LeadThrough:
         if self._enabling and not self._calibrated:
             return None
         return self._enabling
+
+    def _compensated_fraction(self, enabling: bool | None) -> float:
+        """ε this period [–]: ``held_fraction`` while the law takes the device as held.
+
+        Held on a calibrated model, the released arm's stop is the device's (gravity alone
+        once it is let go), not the friction the thesis' ε leaves: active mode then
+        compensates the friction surely there (``CoulombCompensationParameters``). Passive
+        mode keeps the thesis' law, with or without a device.
+        """
+        compensation = self.parameters.compensation
+        held = compensation.held_fraction
+        if self.mode == "active" and enabling and held is not None:
+            return held
+        return compensation.fraction
 
     def _for_the_hand(self, feed_forward: FeedForwardTorques) -> tuple[FloatArray, FloatArray]:
         """The feed-forward and its dither; gravity alone while the device is released.

@@ -75,12 +75,20 @@ class CoulombCompensationParameters:
             little and shakes less in the worst cases; without a calibration a resting
             joint the law misreads slides (dry #1's relaxed circle: 1.5× passive's
             vibration against 0.96× with the thesis' law; README).
+        held_fraction: Active lead-through only: ε while a hand holds the enabling device
+            on a model a start-up calibration measured (``JointState.enabling``; when the
+            law lets go of its friction margin). The thesis' 0.7 leaves 30 % of the
+            friction so that a released arm stops; the device says when the hand lets go,
+            and the controller then sends gravity alone, so while it is held the
+            compensation is the friction surely there (the ceiling, ``(1 − e) τ_C`` less
+            the gravity error that may be, caps it). None keeps ``fraction``.
     """
 
     fraction: float = 0.7
     dead_band: float = 0.003
     full_velocity: float = 0.01
     follow_push: str = "calibrated"
+    held_fraction: float | None = 1.0
 
     def __post_init__(self) -> None:
         if isinstance(self.follow_push, bool):  # TOML's true / false
@@ -88,12 +96,18 @@ class CoulombCompensationParameters:
         if self.follow_push not in FOLLOW_PUSH:
             raise ParameterError("follow_push", f"must be one of {', '.join(FOLLOW_PUSH)} (or "
                                  f"true / false), got {self.follow_push!r}")  # fmt: skip
-        real("fraction", self.fraction, minimum=0.0, error=ParameterError)
-        if self.fraction > 1.0:
-            raise ParameterError("fraction", f"must be ≤ 1, got {self.fraction:g}")
+        _fraction("fraction", self.fraction)
+        if self.held_fraction is not None:
+            _fraction("held_fraction", self.held_fraction)
         real("dead_band", self.dead_band, minimum=0.0, error=ParameterError)
         if real("full_velocity", self.full_velocity, error=ParameterError) <= self.dead_band:
             raise ParameterError("full_velocity", "must be above dead_band")
+
+
+def _fraction(name: str, value: float) -> None:
+    """A fraction of τ_C [–]: a finite number in [0, 1], or a one-line error naming it."""
+    if real(name, value, minimum=0.0, error=ParameterError) > 1.0:
+        raise ParameterError(name, f"must be ≤ 1, got {value:g}")
 
 
 def coulomb_compensation(
@@ -192,6 +206,9 @@ class CoulombCompensation:
     ) -> None:
         self.friction = friction
         self.parameters = parameters or CoulombCompensationParameters()
+        #: ε in use [–]: the parameters' ``fraction`` unless a controller sets another
+        #: (``PassiveFeedForward.use_fraction``).
+        self.fraction = self.parameters.fraction
         self.limits = limits
         self._pole = pole(dt)
         self._torque = np.zeros(friction.n_joints)
@@ -243,7 +260,7 @@ class CoulombCompensation:
             band = np.asarray(dead_band, dtype=float)
             full = np.maximum(p.full_velocity, 2.0 * band)
         level = self.friction.coulomb_level(q)
-        raw = coulomb_compensation(qd, level, p.fraction, band, full, ceiling, push)
+        raw = coulomb_compensation(qd, level, self.fraction, band, full, ceiling, push)
         if self.limits is not None and q is not None:
             raw = raw * self.limits.share(q, raw)
         self._torque = low_pass(self._torque, raw, self._pole)
