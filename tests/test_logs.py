@@ -65,6 +65,18 @@ def test_corrupted_rows_are_dropped_with_one_warning_that_counts_them(tmp_path):
     assert np.all(np.diff(log.t) > 0) and np.all(np.abs(log.q - 1.0) < 0.5)
 
 
+@pytest.mark.parametrize(("row", "jump"), [(0, 50.0), (30, 50.0), (250, 50.0), (30, -50.0),
+                                           (299, -50.0)])  # fmt: skip
+def test_a_time_stamp_that_jumped_costs_its_own_row_only(tmp_path, row, jump):
+    """One row's t off by ±50 s, first, early or last: that row dropped, every other kept."""
+    table = _ur_rows(300)
+    table[row, 0] += jump
+    with pytest.warns(LogWarning, match=rf"dropped 1 of 300 rows as corrupted \(rows {row + 1}\)"):
+        log = lt.read_log(_write(tmp_path / "jump.csv", table))
+    assert log.n_samples == 299 and log.dropped_rows == 1
+    np.testing.assert_allclose(log.t, np.delete(table[:, 0], row), atol=1e-6)
+
+
 def test_a_mostly_garbage_file_is_an_error_naming_it(tmp_path):
     """More than half the rows corrupted: one error with the file's name, nothing returned."""
     table = _ur_rows(40)

@@ -17,13 +17,15 @@ Real logs have corrupted rows. A row is dropped when it has the wrong number of 
 (a truncated last line), a non-finite or physically impossible value (|q| > 4π rad,
 |q̇| > 20 rad/s, |current| > 100 A, |torque| > 5000 Nm: the ``253.0`` and ``1e300``
 rows of UR logs), a joint reading off the run's own path by more than 0.2 rad (a row of
-zeros in a moving log), or a time not after the previous row's. One warning counts the
-dropped rows and names the first ones; a file with more than half its rows dropped is
-an error naming the file.
+zeros in a moving log), or a time out of line with the rows around it (the fewest rows
+are dropped for time to increase: a time stamp that jumped costs its own row, not the
+rows after it). One warning counts the dropped rows and names the first ones; a file
+with more than half its rows dropped is an error naming the file.
 """
 
 from __future__ import annotations
 
+import bisect
 import warnings
 from pathlib import Path
 from typing import Literal
@@ -211,14 +213,27 @@ def _on_path(q: FloatArray, candidates: np.ndarray, window: int = 9) -> np.ndarr
 
 
 def _time_increases(t: FloatArray, keep: np.ndarray) -> np.ndarray:
-    """``keep`` without the rows whose time is not after the last kept row's."""
-    result = keep.copy()
-    last = -np.inf
-    for i in np.flatnonzero(keep):
-        if t[i] <= last:
-            result[i] = False
+    """``keep`` without the fewest rows that leave time [s] increasing along the rest.
+
+    The longest run of kept rows whose time increases: a row whose time stamp jumped
+    (forward or back) is dropped, not the good rows after it. Built from the last row
+    back, so that of two equally long runs (or two equal times) the earlier rows stay.
+    """
+    heads: list[float] = []  # heads[k]: the latest first time of a run of k + 1 rows
+    starts: list[int] = []  # starts[k]: the row that starts that run
+    following = np.full(len(t), -1)
+    for i in np.flatnonzero(keep)[::-1]:
+        k = bisect.bisect_left(heads, -t[i])  # heads kept negated: ascending for bisect
+        following[i] = starts[k - 1] if k else -1
+        if k == len(heads):
+            heads.append(-t[i])
+            starts.append(int(i))
         else:
-            last = t[i]
+            heads[k], starts[k] = -t[i], int(i)
+    result = np.zeros(len(t), dtype=bool)
+    row = starts[-1] if starts else -1
+    while row >= 0:
+        result[row], row = True, following[row]
     return result
 
 
