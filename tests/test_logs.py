@@ -1,5 +1,7 @@
 """Reading robot logs: UR CSV, Panda text, the project's files; corrupted rows dropped loudly."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -8,6 +10,7 @@ from leadthrough.errors import InputShapeError
 from leadthrough.experiments.real_logs import supervisor_verdict
 from leadthrough.friction.identification import IdentificationError
 from leadthrough.runtime.readers import LogError, LogWarning, detect_format
+from leadthrough.runtime.recording import SessionRecorder
 from realdata import REALDATA, needs_realdata
 
 
@@ -125,6 +128,25 @@ def test_excitation_logs_read_as_one_log(tmp_path):
            "tau": np.full((5, 3), 0.5)}  # fmt: skip
     log = lt.read_log(save_logs([run], tmp_path / "logs.npz"))
     np.testing.assert_allclose(log.tau, run["tau"])
+
+
+def test_a_cut_or_unfinished_recording_reads_with_a_warning_saying_how_much(tmp_path):
+    """A crashed recorder's .mcap.part and a recording cut at 60 % read, each with a warning."""
+    robot = lt.robots.yumi()
+    q, z = robot.home(), np.zeros(robot.n_joints)
+    path = tmp_path / "run.mcap"
+    with SessionRecorder(path, robot) as recorder:
+        for k in range(500):
+            recorder.record(k * 0.004, q + 1e-3 * k, z, z, z, z, "active", "teaching")
+        with pytest.warns(LogWarning, match=r"run\.mcap\.part: recovered \d\.\d s"):
+            assert lt.read_log(recorder.part_path).n_samples > 400
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", LogWarning)
+        assert lt.read_log(path).n_samples == 500  # a finished recording: no warning
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(path.read_bytes()[: int(0.6 * path.stat().st_size)])
+    with pytest.warns(LogWarning, match=r"cut\.mcap: recovered .* without its summary"):
+        assert 0 < lt.read_log(cut).n_samples < 500
 
 
 @needs_realdata

@@ -31,9 +31,9 @@ def add_arguments(parser: argparse.ArgumentParser, out_directory) -> None:
 
 def inspect(args: argparse.Namespace) -> int:
     """Read the log, run the observer and the detector, write the report; print a summary."""
-    log = read_log(args.log)  # currents stay currents: the observer applies the robot's K
     with warnings.catch_warnings(record=True) as notes:  # shown after the work, not before
         warnings.simplefilter("always")
+        log = read_log(args.log)  # currents stay currents: the observer applies the robot's K
         robot = robot_from(args)
     friction = FrictionModel.load(args.friction) if args.friction else None
     measured_torque(log, robot)  # joint count, torque or currents and K: checked before the work

@@ -10,7 +10,9 @@ Formats (detected from the path and the first line, or named with ``format=``):
 - ``"panda_txt"``: a folder (or one of its files) with ``*_time.txt``, ``*_positions.txt``,
   ``*_velocity.txt``, ``*_torques.txt``: one value per line, the n joints of a sample on
   n consecutive lines; torques from joint torque sensors [Nm].
-- ``"recording"``: the project's own teaching recordings (``.mcap``).
+- ``"recording"``: the project's own teaching recordings (``.mcap``, or the ``.mcap.part``
+  a crashed recorder left); a cut or damaged one is read up to where it breaks, with a
+  warning saying how much was recovered.
 - ``"excitation"``: the project's excitation logs (``.npz``, or ``.csv`` with a header).
 
 Real logs have corrupted rows. A row is dropped when it has the wrong number of columns
@@ -53,7 +55,7 @@ class LogError(LeadthroughError, ValueError):
 
 
 class LogWarning(UserWarning):
-    """Rows of a log were dropped as corrupted."""
+    """Rows of a log were dropped as corrupted, or a recording was read only in part."""
 
 
 def read_log(
@@ -91,7 +93,7 @@ def detect_format(path: Path) -> Format:
     """The format of ``path`` from its name and first line (see the module docstring)."""
     if path.is_dir() or (path.name.startswith("exciting_traj_") and path.suffix == ".txt"):
         return "panda_txt"
-    if path.suffix == ".mcap":
+    if path.suffix == ".mcap" or path.name.endswith(".mcap.part"):
         return "recording"
     if path.suffix == ".npz":
         return "excitation"
@@ -303,6 +305,8 @@ def _read_recording(path: Path) -> JointLog:
         recording = read_recording(path)
     except RecordingError as error:
         raise LogError(str(error)) from None
+    if not recording.complete:  # a cut, damaged or unfinished file: the user is told how much
+        warnings.warn(f"{path}: {recording.recovery}", LogWarning, stacklevel=3)
     extra = {"tau_ext_hat": recording.tau_ext_hat, "tau_ext_std": recording.tau_ext_std}
     return JointLog(recording.t, recording.q, recording.qd, recording.tau, None, extra,
                     str(path))  # fmt: skip
