@@ -43,6 +43,8 @@ def inspect(args: argparse.Namespace) -> int:
     print(f"{args.log}: {observed.t[-1] - observed.t[0]:.1f} s at {1 / observed.dt:.0f} Hz, "
           f"{len(inspection.events)} contact(s)")  # fmt: skip
     print(f"  {real_logs.supervisor_markdown(inspection.fault)}")  # the report's words
+    if inspection.gaps:
+        print(f"  {real_logs.gaps_markdown(inspection.gaps, float(observed.t[0]))}")
     for event in inspection.events:
         joints = ",".join(str(j + 1) for j in event.joints)
         print(f"  {event.start - observed.t[0]:7.2f} … {event.end - observed.t[0]:7.2f} s  "

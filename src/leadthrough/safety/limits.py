@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from leadthrough.errors import ParameterError
+from leadthrough.logs.log import MAX_GAP
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.validation import real
 
@@ -53,7 +54,7 @@ class SafetyParameters:
     velocity_reading_margin: float = 2.0
     position_reading_margin: float = 0.1
     safe_stop_damping_time: float = 0.5
-    max_time_gap: float | None = 0.25
+    max_time_gap: float | None = MAX_GAP
 
     def __post_init__(self) -> None:
         for name in ("tool_speed_limit", "braking_time", "soft_limit_margin", "wall_damping_time"):
