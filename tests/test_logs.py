@@ -130,6 +130,19 @@ def test_excitation_logs_read_as_one_log(tmp_path):
     np.testing.assert_allclose(log.tau, run["tau"])
 
 
+@pytest.mark.parametrize("keep", [0.0, 0.5], ids=["empty", "truncated"])
+def test_a_truncated_or_empty_npz_is_a_log_error_naming_it(tmp_path, keep):
+    """An .npz cut short (or empty) is a one-line LogError naming the file, no traceback."""
+    from leadthrough.friction.logs import save_logs
+
+    run = {"t": np.arange(50) * 0.004, "q": np.ones((50, 3)), "qd": np.zeros((50, 3)),
+           "tau": np.full((50, 3), 0.5)}  # fmt: skip
+    path = save_logs([run], tmp_path / "logs.npz")
+    path.write_bytes(path.read_bytes()[: int(keep * path.stat().st_size)])
+    with pytest.raises(LogError, match=r"logs\.npz: cannot read logs: truncated, empty"):
+        lt.read_log(path)
+
+
 def test_a_cut_or_unfinished_recording_reads_with_a_warning_saying_how_much(tmp_path):
     """A crashed recorder's .mcap.part and a recording cut at 60 % read, each with a warning."""
     robot = lt.robots.yumi()

@@ -8,6 +8,7 @@ Both formats carry the same columns: ``run`` (an integer per sample naming the r
 from __future__ import annotations
 
 import warnings
+import zipfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -50,6 +51,9 @@ def load_logs(path: str | Path) -> list[dict[str, Any]]:
         raise LogFileError(f"{path}: no such file")
     try:
         arrays = _read_npz(path) if path.suffix == ".npz" else _read_csv(path)
+    except (EOFError, zipfile.BadZipFile) as error:  # numpy's words for a cut or empty file
+        raise LogFileError(f"{path}: cannot read logs: truncated, empty or not an .npz "
+                           f"({error})") from None  # fmt: skip
     except (OSError, ValueError, KeyError) as error:
         raise LogFileError(f"{path}: cannot read logs ({error})") from None
     runs = arrays["run"]
@@ -71,7 +75,7 @@ def _stack(logs: Sequence) -> dict[str, np.ndarray]:
 
 
 def _read_npz(path: Path) -> dict[str, np.ndarray]:
-    with np.load(path) as data:
+    with path.open("rb") as file, np.load(file) as data:  # closed when not a zip too
         arrays = {name: data[name] for name in ("t", "q", "qd", "tau")}
         arrays["run"] = data["run"] if "run" in data else np.zeros(len(arrays["t"]), dtype=int)
     return arrays
