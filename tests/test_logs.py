@@ -130,6 +130,22 @@ def test_excitation_logs_read_as_one_log(tmp_path):
     np.testing.assert_allclose(log.tau, run["tau"])
 
 
+def test_an_excitation_csv_drops_and_counts_a_nan_row_and_a_truncated_last_line(tmp_path):
+    """save_logs' CSV with a NaN row and a cut last line: those two dropped, one warning."""
+    from leadthrough.friction.logs import save_logs
+
+    t = np.arange(50) * 0.004
+    run = {"t": t, "q": np.outer(t, [1.0, 2.0]), "qd": np.ones((50, 2)), "tau": np.ones((50, 2))}
+    run["q"][20, 1] = np.nan
+    path = save_logs([run], tmp_path / "mine.csv")
+    path.write_text(path.read_text() + "0,0.2,0.1,0.2\n")  # the writer stopped mid-row
+    dropped = r"mine\.csv: dropped 2 of 51 rows as corrupted \(rows 21, 51\)"
+    with pytest.warns(LogWarning, match=dropped):
+        log = lt.read_log(path)
+    assert log.n_samples == 49 and log.dropped_rows == 2 and np.all(np.isfinite(log.q))
+    np.testing.assert_allclose(log.t, np.delete(t, 20))
+
+
 @pytest.mark.parametrize("keep", [0.0, 0.5], ids=["empty", "truncated"])
 def test_a_truncated_or_empty_npz_is_a_log_error_naming_it(tmp_path, keep):
     """An .npz cut short (or empty) is a one-line LogError naming the file, no traceback."""

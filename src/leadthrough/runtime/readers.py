@@ -34,8 +34,15 @@ from typing import Literal
 
 import numpy as np
 
-from leadthrough.errors import LeadthroughError
 from leadthrough.logs.log import FloatArray, JointLog, period_problem
+from leadthrough.logs.rows import (
+    LogError,
+    LogWarning,
+    accept,
+    as_table,
+    common_width,
+    numeric_rows,
+)
 from leadthrough.model.description import RobotDescription
 
 Format = Literal["ur_csv", "panda_txt", "recording", "excitation"]
@@ -46,16 +53,6 @@ _UR_WIDTHS = (19, 25, 31)
 _BOUNDS = {"q": 4.0 * np.pi, "qd": 20.0, "current": 100.0, "torque": 5000.0}
 #: A joint reading farther than this from the run's running median is corrupted [rad].
 _OFF_PATH = 0.2
-#: More than this fraction of rows dropped: the file is not a log.
-_MOSTLY_GARBAGE = 0.5
-
-
-class LogError(LeadthroughError, ValueError):
-    """A file cannot be read as a robot log (the message names the file)."""
-
-
-class LogWarning(UserWarning):
-    """Rows of a log were dropped as corrupted, or a recording was read only in part."""
 
 
 def read_log(
@@ -151,21 +148,16 @@ def _with_robot(log: JointLog, robot: RobotDescription) -> JointLog:
 
 
 def _read_ur_csv(path: Path) -> JointLog:
-    rows = _numeric_rows(path)
-    widths = [len(row) for row in rows]
-    width = max(set(widths), key=widths.count) if widths else 0
+    rows = numeric_rows(path)
+    width = common_width(rows)
     if width not in _UR_WIDTHS:
         raise LogError(f"{path}: rows have {width} columns, a UR log has 19, 25 or 31")
-    complete = np.array([len(row) == width for row in rows])
-    table = np.full((len(rows), width), np.nan)
-    for i, row in enumerate(rows):
-        if complete[i]:
-            table[i] = row
+    table, complete = as_table(rows, width)
     targets = ["current"] * 6 + ["torque"] * 6 if width == 31 else ["other"] * 6  # 25: unnamed
     kinds = ["time"] + ["q"] * 6 + ["qd"] * 6 + ["current"] * 6 + targets
     keep = complete & _plausible(table, kinds[:width]) & _on_path(table[:, 1:7], complete)
     keep &= _time_increases(table[:, 0], keep)
-    table = _accept(path, table, keep, len(rows))
+    table = accept(path, table, keep)
     extra = {}
     if width == 25:  # columns 20–25 of these files are not documented: kept, not named
         extra["columns_20_25"] = table[:, 19:25]
@@ -173,23 +165,6 @@ def _read_ur_csv(path: Path) -> JointLog:
         extra["target_current"], extra["target_torque"] = table[:, 19:25], table[:, 25:31]
     return JointLog(table[:, 0], table[:, 1:7], table[:, 7:13], None, table[:, 13:19], extra,
                     str(path), int(len(rows) - keep.sum()))  # fmt: skip
-
-
-def _numeric_rows(path: Path) -> list[list[float]]:
-    """Every non-empty line as floats; an unparsable line becomes an empty row."""
-    try:
-        lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
-    except OSError as error:
-        raise LogError(f"{path}: cannot read ({error})") from None
-    rows = []
-    for line in lines:
-        if not line.strip():
-            continue
-        try:
-            rows.append([float(value) for value in line.split(",")])
-        except ValueError:
-            rows.append([])
-    return rows
 
 
 def _plausible(table: FloatArray, kinds: list[str]) -> np.ndarray:
@@ -239,19 +214,6 @@ def _time_increases(t: FloatArray, keep: np.ndarray) -> np.ndarray:
     return result
 
 
-def _accept(path: Path, table: FloatArray, keep: np.ndarray, total: int) -> FloatArray:
-    """The kept rows; a warning for the dropped ones, an error if they are most."""
-    dropped = np.flatnonzero(~keep)
-    if total == 0 or dropped.size > _MOSTLY_GARBAGE * total:
-        raise LogError(f"{path}: {dropped.size} of {total} rows are corrupted: not a usable log")
-    if dropped.size:
-        first = ", ".join(str(i + 1) for i in dropped[:5])
-        more = ", …" if dropped.size > 5 else ""
-        warnings.warn(f"{path}: dropped {dropped.size} of {total} rows as corrupted "
-                      f"(rows {first}{more})", LogWarning, stacklevel=4)  # fmt: skip
-    return table[keep]
-
-
 # --- Panda text ------------------------------------------------------------------------
 
 
@@ -278,7 +240,7 @@ def _read_panda_txt(path: Path) -> JointLog:
     kinds = ["time"] + ["q"] * n + ["qd"] * n + ["torque"] * n
     keep = _plausible(table, kinds)
     keep = _time_increases(t, keep & _on_path(q, keep))
-    table = _accept(folder, table, keep, t.size)
+    table = accept(folder, table, keep)
     return JointLog(table[:, 0], table[:, 1:1 + n], table[:, 1 + n:1 + 2 * n],
                     table[:, 1 + 2 * n:], source=str(folder),
                     dropped_rows=int(t.size - keep.sum()))  # fmt: skip
@@ -322,4 +284,5 @@ def _read_excitation(path: Path) -> JointLog:
     if len(runs) != 1:
         raise LogError(f"{path}: holds {len(runs)} runs; read them with friction.logs.load_logs")
     run = runs[0]
-    return JointLog(run["t"], run["q"], run["qd"], run["tau"], source=str(path))
+    return JointLog(run["t"], run["q"], run["qd"], run["tau"], source=str(path),
+                    dropped_rows=run["dropped_rows"])  # fmt: skip
