@@ -366,6 +366,27 @@ def test_a_bad_time_stamp_is_a_fault_with_the_damped_stop(stamp, reason):
     np.testing.assert_allclose(later, command, atol=1e-9)  # still damped, a good stamp after
 
 
+@pytest.mark.parametrize("bad", ["q", "qd", "tau"])
+def test_readings_that_are_not_numbers_latch_the_same_fault_in_both_forms(bad):
+    """step("abc", qd, tau) latches the fault a JointState of "abc" does, a finite safe stop.
+
+    Before, the positional form raised numpy's ValueError and left the controller teaching.
+    """
+    readings = {
+        "q": ROBOT.home(),
+        "qd": np.zeros(N),
+        "tau": lt.Dynamics(ROBOT).gravity(ROBOT.home()),
+    }
+    readings[bad] = "abc"
+    positional, stamped = lt.LeadThrough(ROBOT, "active"), lt.LeadThrough(ROBOT, "active")
+    command = positional.step(readings["q"], readings["qd"], readings["tau"])
+    stamped.step(JointState(0.004, readings["q"], readings["qd"], readings["tau"]))
+    assert positional.state is stamped.state is SupervisorState.FAULT
+    assert positional.supervisor.fault_reason == stamped.supervisor.fault_reason
+    assert "could not convert string to float: 'abc'" in str(positional.supervisor.fault_reason)
+    assert np.all(np.isfinite(command))
+
+
 def test_a_clock_in_milliseconds_stops_the_calibration_before_any_kick():
     """A driver stamping milliseconds (4 per period at 250 Hz): the second sample faults.
 
