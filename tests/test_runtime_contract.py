@@ -407,6 +407,29 @@ def test_a_clock_in_milliseconds_stops_the_calibration_before_any_kick():
     assert np.max(np.abs(np.array(robot.sent) - gravity)) < 2.0  # [Nm]
 
 
+@pytest.mark.parametrize(("back", "fault"), [(0.002, False), (10.0, True)])
+def test_a_clock_stepping_back_further_than_the_largest_gap_stops_the_calibration(back, fault):
+    """The clock steps back at 0.2 s, in the calibration: 2 ms (coarse) taken, 10 s a fault.
+
+    Before, a step back of 10 s was taken: the calibration ran on for the time stepped
+    back (the arm moving by itself for 10 s more).
+    """
+
+    class SteppingBack(ShiftedClock):
+        def read_state(self) -> JointState:
+            state = self.twin.read_state()
+            t = state.t - (back if state.t >= 0.2 else 0.0)
+            return JointState(t, state.q, state.qd, state.tau_measured)
+
+    controller = lt.LeadThrough(ROBOT, "active", calibrate=True)
+    lt.control_loop(SteppingBack(DigitalTwin(ROBOT), 0.0), controller, duration=0.4,
+                    wall_clock=False)  # fmt: skip
+    assert (controller.state is SupervisorState.FAULT) is fault
+    reason = str(controller.supervisor.fault_reason)
+    stepped = r"time stamp stepped back 9\.99\d s, from 0\.19\d+ to -9\.8\d+ s \(more than"
+    assert bool(re.match(stepped + r" max_time_gap 0\.25 s\)", reason)) is fault, reason
+
+
 class Ordered(ShiftedClock):
     """A driver that notes each command sent in a shared journal."""
 

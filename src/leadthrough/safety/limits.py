@@ -34,7 +34,8 @@ class SafetyParameters:
         velocity_reading_margin: Velocities beyond this × the speed limit are out of range.
         position_reading_margin: Positions this far beyond the hard limits are out of range [rad].
         safe_stop_damping_time: Duration of the damped hold after a fault [s], then no damping.
-        max_time_gap: A sample stamped more than this after the one before is a fault [s]:
+        max_time_gap: A sample stamped more than this after the one before (or before
+            it: a clock reset) is a fault [s]:
             samples lost (the arm ran on its last command meanwhile), or a clock not in
             seconds (a driver stamping milliseconds jumps 4 s a period at 250 Hz, and the
             start-up calibration's integral took it whole: a kick to the torque limits).
