@@ -40,6 +40,21 @@ def test_inspect_writes_a_report_with_the_injected_push(ur10e, tmp_path, capsys)
     assert (tmp_path / "out" / "observer.png").stat().st_size > 10_000
 
 
+def test_no_contact_spans_a_gap_in_time_and_the_report_says_where_it_is(ur10e, tmp_path, capsys):
+    """Free motion with 3 s of rows missing: no contact (none is in the data), the gap named."""
+    log = synthetic_log(ur10e, duration=10.0, current=True)
+    kept = (log.t < 3.0) | (log.t >= 6.0)
+    gapped = lt.JointLog(log.t[kept], log.q[kept], log.qd[kept], current=log.current[kept])
+    assert lt.detect_contacts(gapped, ur10e, None) == []
+    write_ur_csv(gapped, tmp_path / "gap.csv")
+    assert main(["inspect", str(tmp_path / "gap.csv"), "--out", str(tmp_path / "out")]) == 0
+    printed = capsys.readouterr().out
+    start, end = (gapped.t[k] - gapped.t[0] for k in (np.argmin(kept) - 1, np.argmin(kept)))
+    where = f"1 gap(s) in time longer than 0.25 s (rows missing), at {start:.2f} … {end:.2f} s"
+    assert "0 contact(s)" in printed and where in printed
+    assert where in (tmp_path / "out" / "report.md").read_text()
+
+
 def test_false_alarm_table_against_direct_computation():
     """RMS, peak, exceedance of 2 std and RMS of τ̂/std of known samples."""
     tau = np.array([[1.0, -4.0], [-1.0, 0.0], [3.0, 0.0], [-1.0, 2.0]])

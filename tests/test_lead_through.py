@@ -260,6 +260,11 @@ def test_toml_false_sets_what_may_be_none(tmp_path):
     path.write_text("[dither]\ncreep = -1.0\n")
     with pytest.raises(lt.ParameterError, match=r"lead\.toml: dither: creep: must be > 0"):
         LeadThroughParameters.from_toml(path)
+    path.write_text('limit_aware = "no"\n')  # was taken, then failed as a bare ValueError
+    with pytest.raises(lt.ParameterError, match=r"lead\.toml: limit_aware: expected true or false"):
+        LeadThroughParameters.from_toml(path)
+    with pytest.raises(lt.ParameterError, match=r"^limit_aware: expected true or false, got 'no'"):
+        LeadThroughParameters(limit_aware="no")  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize("kind", ["plane", "box"])

@@ -1,5 +1,7 @@
 """Reading robot logs: UR CSV, Panda text, the project's files; corrupted rows dropped loudly."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -8,6 +10,7 @@ from leadthrough.errors import InputShapeError
 from leadthrough.experiments.real_logs import supervisor_verdict
 from leadthrough.friction.identification import IdentificationError
 from leadthrough.runtime.readers import LogError, LogWarning, detect_format
+from leadthrough.runtime.recording import SessionRecorder
 from realdata import REALDATA, needs_realdata
 
 
@@ -65,6 +68,18 @@ def test_corrupted_rows_are_dropped_with_one_warning_that_counts_them(tmp_path):
     assert np.all(np.diff(log.t) > 0) and np.all(np.abs(log.q - 1.0) < 0.5)
 
 
+@pytest.mark.parametrize(("row", "jump"), [(0, 50.0), (30, 50.0), (250, 50.0), (30, -50.0),
+                                           (299, -50.0)])  # fmt: skip
+def test_a_time_stamp_that_jumped_costs_its_own_row_only(tmp_path, row, jump):
+    """One row's t off by ±50 s, first, early or last: that row dropped, every other kept."""
+    table = _ur_rows(300)
+    table[row, 0] += jump
+    with pytest.warns(LogWarning, match=rf"dropped 1 of 300 rows as corrupted \(rows {row + 1}\)"):
+        log = lt.read_log(_write(tmp_path / "jump.csv", table))
+    assert log.n_samples == 299 and log.dropped_rows == 1
+    np.testing.assert_allclose(log.t, np.delete(table[:, 0], row), atol=1e-6)
+
+
 def test_a_mostly_garbage_file_is_an_error_naming_it(tmp_path):
     """More than half the rows corrupted: one error with the file's name, nothing returned."""
     table = _ur_rows(40)
@@ -113,6 +128,54 @@ def test_excitation_logs_read_as_one_log(tmp_path):
            "tau": np.full((5, 3), 0.5)}  # fmt: skip
     log = lt.read_log(save_logs([run], tmp_path / "logs.npz"))
     np.testing.assert_allclose(log.tau, run["tau"])
+
+
+def test_an_excitation_csv_drops_and_counts_a_nan_row_and_a_truncated_last_line(tmp_path):
+    """save_logs' CSV with a NaN row and a cut last line: those two dropped, one warning."""
+    from leadthrough.friction.logs import save_logs
+
+    t = np.arange(50) * 0.004
+    run = {"t": t, "q": np.outer(t, [1.0, 2.0]), "qd": np.ones((50, 2)), "tau": np.ones((50, 2))}
+    run["q"][20, 1] = np.nan
+    path = save_logs([run], tmp_path / "mine.csv")
+    path.write_text(path.read_text() + "0,0.2,0.1,0.2\n")  # the writer stopped mid-row
+    dropped = r"mine\.csv: dropped 2 of 51 rows as corrupted \(rows 21, 51\)"
+    with pytest.warns(LogWarning, match=dropped):
+        log = lt.read_log(path)
+    assert log.n_samples == 49 and log.dropped_rows == 2 and np.all(np.isfinite(log.q))
+    np.testing.assert_allclose(log.t, np.delete(t, 20))
+
+
+@pytest.mark.parametrize("keep", [0.0, 0.5], ids=["empty", "truncated"])
+def test_a_truncated_or_empty_npz_is_a_log_error_naming_it(tmp_path, keep):
+    """An .npz cut short (or empty) is a one-line LogError naming the file, no traceback."""
+    from leadthrough.friction.logs import save_logs
+
+    run = {"t": np.arange(50) * 0.004, "q": np.ones((50, 3)), "qd": np.zeros((50, 3)),
+           "tau": np.full((50, 3), 0.5)}  # fmt: skip
+    path = save_logs([run], tmp_path / "logs.npz")
+    path.write_bytes(path.read_bytes()[: int(keep * path.stat().st_size)])
+    with pytest.raises(LogError, match=r"logs\.npz: cannot read logs: truncated, empty"):
+        lt.read_log(path)
+
+
+def test_a_cut_or_unfinished_recording_reads_with_a_warning_saying_how_much(tmp_path):
+    """A crashed recorder's .mcap.part and a recording cut at 60 % read, each with a warning."""
+    robot = lt.robots.yumi()
+    q, z = robot.home(), np.zeros(robot.n_joints)
+    path = tmp_path / "run.mcap"
+    with SessionRecorder(path, robot) as recorder:
+        for k in range(500):
+            recorder.record(k * 0.004, q + 1e-3 * k, z, z, z, z, "active", "teaching")
+        with pytest.warns(LogWarning, match=r"run\.mcap\.part: recovered \d\.\d s"):
+            assert lt.read_log(recorder.part_path).n_samples > 400
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", LogWarning)
+        assert lt.read_log(path).n_samples == 500  # a finished recording: no warning
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(path.read_bytes()[: int(0.6 * path.stat().st_size)])
+    with pytest.warns(LogWarning, match=r"cut\.mcap: recovered .* without its summary"):
+        assert 0 < lt.read_log(cut).n_samples < 500
 
 
 @needs_realdata

@@ -366,6 +366,27 @@ def test_a_bad_time_stamp_is_a_fault_with_the_damped_stop(stamp, reason):
     np.testing.assert_allclose(later, command, atol=1e-9)  # still damped, a good stamp after
 
 
+@pytest.mark.parametrize("bad", ["q", "qd", "tau"])
+def test_readings_that_are_not_numbers_latch_the_same_fault_in_both_forms(bad):
+    """step("abc", qd, tau) latches the fault a JointState of "abc" does, a finite safe stop.
+
+    Before, the positional form raised numpy's ValueError and left the controller teaching.
+    """
+    readings = {
+        "q": ROBOT.home(),
+        "qd": np.zeros(N),
+        "tau": lt.Dynamics(ROBOT).gravity(ROBOT.home()),
+    }
+    readings[bad] = "abc"
+    positional, stamped = lt.LeadThrough(ROBOT, "active"), lt.LeadThrough(ROBOT, "active")
+    command = positional.step(readings["q"], readings["qd"], readings["tau"])
+    stamped.step(JointState(0.004, readings["q"], readings["qd"], readings["tau"]))
+    assert positional.state is stamped.state is SupervisorState.FAULT
+    assert positional.supervisor.fault_reason == stamped.supervisor.fault_reason
+    assert "could not convert string to float: 'abc'" in str(positional.supervisor.fault_reason)
+    assert np.all(np.isfinite(command))
+
+
 def test_a_clock_in_milliseconds_stops_the_calibration_before_any_kick():
     """A driver stamping milliseconds (4 per period at 250 Hz): the second sample faults.
 
@@ -384,6 +405,29 @@ def test_a_clock_in_milliseconds_stops_the_calibration_before_any_kick():
     assert "time stamp jumped 4 s" in str(controller.supervisor.fault_reason)
     gravity = lt.Dynamics(ROBOT).gravity(ROBOT.home())
     assert np.max(np.abs(np.array(robot.sent) - gravity)) < 2.0  # [Nm]
+
+
+@pytest.mark.parametrize(("back", "fault"), [(0.002, False), (10.0, True)])
+def test_a_clock_stepping_back_further_than_the_largest_gap_stops_the_calibration(back, fault):
+    """The clock steps back at 0.2 s, in the calibration: 2 ms (coarse) taken, 10 s a fault.
+
+    Before, a step back of 10 s was taken: the calibration ran on for the time stepped
+    back (the arm moving by itself for 10 s more).
+    """
+
+    class SteppingBack(ShiftedClock):
+        def read_state(self) -> JointState:
+            state = self.twin.read_state()
+            t = state.t - (back if state.t >= 0.2 else 0.0)
+            return JointState(t, state.q, state.qd, state.tau_measured)
+
+    controller = lt.LeadThrough(ROBOT, "active", calibrate=True)
+    lt.control_loop(SteppingBack(DigitalTwin(ROBOT), 0.0), controller, duration=0.4,
+                    wall_clock=False)  # fmt: skip
+    assert (controller.state is SupervisorState.FAULT) is fault
+    reason = str(controller.supervisor.fault_reason)
+    stepped = r"time stamp stepped back 9\.99\d s, from 0\.19\d+ to -9\.8\d+ s \(more than"
+    assert bool(re.match(stepped + r" max_time_gap 0\.25 s\)", reason)) is fault, reason
 
 
 class Ordered(ShiftedClock):

@@ -408,6 +408,13 @@ def test_invalid_period_is_rejected(dyn):
         SafetySupervisor(dyn, dt=0.0)
 
 
+def test_a_period_longer_than_the_largest_time_gap_is_refused_at_construction(dyn):
+    """A 0.5 s period > max_time_gap 0.25 s: refused naming both; with no max_time_gap, taken."""
+    with pytest.raises(ParameterError, match=r"dt: 0\.5 s is longer than .*max_time_gap 0\.25 s"):
+        lt.LeadThrough(ROBOT, dt=0.5)
+    assert SafetySupervisor(dyn, 0.5, SafetyParameters(max_time_gap=None)).dt == 0.5
+
+
 def test_use_model_keeps_robot_dynamics_and_bounds_together(sup):
     """After a payload the supervisor's robot is its model's; the safe stop holds the payload."""
     loaded = lt.Dynamics(ROBOT.with_payload(1.5))

@@ -31,9 +31,9 @@ def add_arguments(parser: argparse.ArgumentParser, out_directory) -> None:
 
 def inspect(args: argparse.Namespace) -> int:
     """Read the log, run the observer and the detector, write the report; print a summary."""
-    log = read_log(args.log)  # currents stay currents: the observer applies the robot's K
     with warnings.catch_warnings(record=True) as notes:  # shown after the work, not before
         warnings.simplefilter("always")
+        log = read_log(args.log)  # currents stay currents: the observer applies the robot's K
         robot = robot_from(args)
     friction = FrictionModel.load(args.friction) if args.friction else None
     measured_torque(log, robot)  # joint count, torque or currents and K: checked before the work
@@ -43,6 +43,8 @@ def inspect(args: argparse.Namespace) -> int:
     print(f"{args.log}: {observed.t[-1] - observed.t[0]:.1f} s at {1 / observed.dt:.0f} Hz, "
           f"{len(inspection.events)} contact(s)")  # fmt: skip
     print(f"  {real_logs.supervisor_markdown(inspection.fault)}")  # the report's words
+    if inspection.gaps:
+        print(f"  {real_logs.gaps_markdown(inspection.gaps, float(observed.t[0]))}")
     for event in inspection.events:
         joints = ",".join(str(j + 1) for j in event.joints)
         print(f"  {event.start - observed.t[0]:7.2f} … {event.end - observed.t[0]:7.2f} s  "

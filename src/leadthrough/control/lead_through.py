@@ -84,7 +84,8 @@ class LeadThrough:
         robot: The arm (its ``tcp`` is where the tool speed limit, the constraints and
             :attr:`tool_wrench` act).
         mode: ``"passive"`` or ``"active"`` (overrides ``parameters.mode``).
-        dt: Control period [s]; must be the robot's (``control_loop`` checks it).
+        dt: Control period [s]; must be the robot's (``control_loop`` checks it), and at
+            most ``parameters.safety.max_time_gap`` (0.25 s).
         friction: Friction model identified on this arm (``leadthrough identify``): its own
             ``relative_error`` stands on every joint. Default the description's, the robot
             type's model: a joint's level that the start-up calibration did not measure is

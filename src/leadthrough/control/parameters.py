@@ -34,7 +34,7 @@ from leadthrough.estimation.tool_force import ToolForceParameters
 from leadthrough.friction.compensation import CoulombCompensationParameters
 from leadthrough.model.description import RobotDescription
 from leadthrough.safety.supervisor import SafetyParameters
-from leadthrough.validation import real
+from leadthrough.validation import real, short
 
 Mode = Literal["passive", "active"]
 
@@ -204,6 +204,10 @@ class LeadThroughParameters:
     def __post_init__(self) -> None:
         if self.mode not in ("passive", "active"):
             raise ParameterError("mode", f"'passive' or 'active', got {self.mode!r}")
+        if not isinstance(self.limit_aware, bool | np.bool_):  # "no" would read as True
+            raise ParameterError(
+                "limit_aware", f"expected true or false, got {short(self.limit_aware)}"
+            )
         positive = ("inertia_scale", "damping_time", "push_time", "settle_time",
                     "velocity_time", "bias_time", "reanchor_error", "limit_zone",
                     "assist_speed_fraction")  # fmt: skip

@@ -6,7 +6,8 @@
 
 Irregular time stamps (real logs jitter by tens of percent) are handled by resampling
 q, q̇ and τ linearly onto a uniform grid at the log's median period, the rate the
-observer runs at; the result and the events are in the log's own time base.
+observer runs at; the result and the events are in the log's own time base. A gap with
+rows missing is not resampled across: :func:`observe_runs` observes each gap-free run.
 
 The observer's std covers the friction it models as noise; a real arm's model is also
 wrong in ways that are not white noise (link inertials, drive gains, friction levels).
@@ -34,7 +35,7 @@ from leadthrough.errors import LeadthroughError, ParameterError
 from leadthrough.estimation.contacts import ContactDetector, ContactEvent, ContactParameters
 from leadthrough.estimation.observer import MomentumObserver, ObserverParameters
 from leadthrough.friction.model import FrictionModel
-from leadthrough.logs.log import JointLog
+from leadthrough.logs.log import MAX_GAP, JointLog
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.validation import real
@@ -190,6 +191,40 @@ def observe_log(
     return ObservedLog(t, q, qd, tau, tau_ext, std_observer, std_model, log.source)
 
 
+def observe_runs(
+    log: JointLog,
+    robot: RobotDescription,
+    friction: FrictionModel | None = None,
+    uncertainty: ModelUncertainty | None = None,
+) -> list[ObservedLog]:
+    """:func:`observe_log` over each gap-free run of ``log`` of at least 3 samples.
+
+    A gap longer than :data:`~leadthrough.logs.log.MAX_GAP` has rows missing: resampled
+    across it the observer would run on interpolated data, so it starts afresh after it.
+
+    Raises:
+        LogInputError: As :func:`observe_log`, or no run of 3 samples between gaps.
+    """
+    runs = [run for run in log.runs() if run.n_samples >= 3]
+    if not runs and log.n_samples >= 3:
+        raise LogInputError(f"{log.source or 'log'}: no 3 samples in a row without a gap in "
+                            f"time of more than {MAX_GAP:g} s")  # fmt: skip
+    if not runs:
+        return [observe_log(log, robot, friction, uncertainty)]  # its error: too short
+    return [observe_log(run, robot, friction, uncertainty) for run in runs]
+
+
+def joined(runs: Sequence[ObservedLog]) -> ObservedLog:
+    """Observed runs of one log end to end (the grid is uniform within each run only)."""
+
+    def end_to_end(name: str) -> FloatArray:
+        return np.concatenate([getattr(run, name) for run in runs])
+
+    return ObservedLog(end_to_end("t"), end_to_end("q"), end_to_end("qd"), end_to_end("tau"),
+                       end_to_end("tau_ext"), end_to_end("std_observer"),
+                       end_to_end("std_model"), runs[0].source)  # fmt: skip
+
+
 def gravity_scale(robot: RobotDescription, poses: int = 256) -> FloatArray:
     """RMS of each joint's gravity torque over seeded poses across its range [Nm], (n,).
 
@@ -267,12 +302,14 @@ def detect_contacts(
 
     Returns:
         The events, in time order, each with start and end [s] in the log's time base,
-        the joints (0-based) and the peak estimated torque per joint [Nm].
+        the joints (0-based) and the peak estimated torque per joint [Nm]; none spans a
+        gap in time (:func:`observe_runs`).
 
     Raises:
         LogInputError: No torque in the log, a joint count that does not match, too short.
     """
-    return run_detector(observe_log(log, robot, friction, uncertainty), parameters)
+    runs = observe_runs(log, robot, friction, uncertainty)
+    return [event for run in runs for event in run_detector(run, parameters)]
 
 
 def false_alarm_table(

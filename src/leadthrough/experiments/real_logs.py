@@ -13,7 +13,7 @@ with a figure of τ̂_ext ± 2 std per joint and the contacts) is written.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from leadthrough.estimation.contacts import ContactEvent, ContactParameters
@@ -21,12 +21,13 @@ from leadthrough.estimation.log_observer import (
     ModelUncertainty,
     ObservedLog,
     false_alarm_table,
+    joined,
     measured_torque,
-    observe_log,
+    observe_runs,
     run_detector,
 )
 from leadthrough.friction.model import FrictionModel
-from leadthrough.logs.log import JointLog
+from leadthrough.logs.log import MAX_GAP, JointLog
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.safety.limits import SafetyParameters
@@ -46,6 +47,9 @@ class Inspection:
             start [s], the reason), or None (:func:`supervisor_verdict`).
         logged: Samples in the log as recorded (``observed`` is resampled onto a uniform
             grid at its median period); 0: not known.
+        gaps: (last time before, first time after) of each gap in the log longer than
+            :data:`~leadthrough.logs.log.MAX_GAP` [s], log time base: rows missing, not
+            observed across.
     """
 
     observed: ObservedLog
@@ -54,6 +58,7 @@ class Inspection:
     robot: str
     fault: tuple[float, str] | None = None
     logged: int = 0
+    gaps: list[tuple[float, float]] = field(default_factory=list)
 
 
 def supervisor_verdict(log: JointLog, robot: RobotDescription) -> tuple[float, str] | None:
@@ -81,11 +86,14 @@ def inspect_log(
     uncertainty: ModelUncertainty | None = None,
     parameters: ContactParameters | None = None,
 ) -> Inspection:
-    """The observer over ``log`` at its own rate, the contacts and the false-alarm table."""
-    observed = observe_log(log, robot, friction, uncertainty)
-    events = run_detector(observed, parameters)
-    return Inspection(observed, events, false_alarm_table([observed]), robot.name,
-                      supervisor_verdict(log, robot), int(log.t.size))  # fmt: skip
+    """The observer over ``log`` at its own rate, the contacts and the false-alarm table.
+
+    Each gap-free run is observed on its own (:func:`observe_runs`): no contact spans a gap.
+    """
+    runs = observe_runs(log, robot, friction, uncertainty)
+    events = [event for run in runs for event in run_detector(run, parameters)]
+    return Inspection(joined(runs), events, false_alarm_table(runs), robot.name,
+                      supervisor_verdict(log, robot), int(log.t.size), log.gaps())  # fmt: skip
 
 
 def false_alarm_markdown(table: dict[str, FloatArray], label: str = "") -> str:
@@ -106,6 +114,16 @@ def supervisor_markdown(fault: tuple[float, str] | None) -> str:
         return ("Every sample of the log, as recorded, passes the supervisor's checks: none is "
                 "out of range, non-finite or stale.")  # fmt: skip
     return f"The supervisor would fault {fault[0]:.2f} s into the log: {fault[1]}."
+
+
+def gaps_markdown(gaps: Sequence[tuple[float, float]], t0: float) -> str:
+    """One line: where the log has rows missing (gaps from its start [s]), or that it has none."""
+    if not gaps:
+        return f"No gap in time longer than {MAX_GAP:g} s."
+    where = ", ".join(f"{start - t0:.2f} … {end - t0:.2f} s" for start, end in gaps[:5])
+    more = f" and {len(gaps) - 5} more" if len(gaps) > 5 else ""
+    return (f"{len(gaps)} gap(s) in time longer than {MAX_GAP:g} s (rows missing), at {where}"
+            f"{more}: the observer starts afresh after each, no contact spans one.")  # fmt: skip
 
 
 def events_markdown(events: Sequence[ContactEvent], t0: float) -> str:
@@ -144,6 +162,8 @@ def write_inspection(inspection: Inspection, source: str, out: Path) -> Path:
         supervisor_markdown(inspection.fault),
         "",
         "## Contacts",
+        "",
+        gaps_markdown(inspection.gaps, float(observed.t[0])),
         "",
         events_markdown(inspection.events, float(observed.t[0])),
         "",

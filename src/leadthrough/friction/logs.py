@@ -3,11 +3,13 @@
 Both formats carry the same columns: ``run`` (an integer per sample naming the run),
 ``t`` [s], then per joint ``q{i}`` [rad], ``qd{i}`` [rad/s], ``tau{i}`` [Nm, arm side]
 (i = 1…n). In NPZ the arrays are ``run`` (N,), ``t`` (N,), ``q``, ``qd``, ``tau`` (N, n).
+A CSV row that is cut short, unreadable or not finite is dropped with one
+:class:`~leadthrough.logs.rows.LogWarning` counting them, as the readers of robot logs do.
 """
 
 from __future__ import annotations
 
-import warnings
+import zipfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -15,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from leadthrough.errors import LeadthroughError
+from leadthrough.logs.rows import LogError, accept, as_table, common_width, numeric_rows
 
 
 class LogFileError(LeadthroughError, ValueError):
@@ -42,19 +45,26 @@ def save_logs(logs: Sequence, path: str | Path) -> Path:
 def load_logs(path: str | Path) -> list[dict[str, Any]]:
     """Read logs written by :func:`save_logs` (or by hand in the same layout), one per run.
 
-    Each a mapping of its arrays ``t``, ``q``, ``qd``, ``tau`` and its ``source`` (the
-    file, and the run where it holds several), which errors name.
+    Each a mapping of its arrays ``t``, ``q``, ``qd``, ``tau``, its ``source`` (the
+    file, and the run where it holds several), which errors name, and ``dropped_rows``,
+    the rows of the file dropped as corrupted.
     """
     path = Path(path)
     if not path.is_file():
         raise LogFileError(f"{path}: no such file")
     try:
         arrays = _read_npz(path) if path.suffix == ".npz" else _read_csv(path)
+    except LogError as error:  # most rows corrupted: its message names the file already
+        raise LogFileError(str(error)) from None
+    except (EOFError, zipfile.BadZipFile) as error:  # numpy's words for a cut or empty file
+        raise LogFileError(f"{path}: cannot read logs: truncated, empty or not an .npz "
+                           f"({error})") from None  # fmt: skip
     except (OSError, ValueError, KeyError) as error:
         raise LogFileError(f"{path}: cannot read logs ({error})") from None
     runs = arrays["run"]
     numbers = np.unique(runs)
     return [{"source": str(path) if len(numbers) == 1 else f"{path} (run {run:g})",
+             "dropped_rows": int(arrays["dropped_rows"]),
              **{name: arrays[name][runs == run] for name in ("t", "q", "qd", "tau")}}
             for run in numbers]  # fmt: skip
 
@@ -71,28 +81,32 @@ def _stack(logs: Sequence) -> dict[str, np.ndarray]:
 
 
 def _read_npz(path: Path) -> dict[str, np.ndarray]:
-    with np.load(path) as data:
+    with path.open("rb") as file, np.load(file) as data:  # closed when not a zip too
         arrays = {name: data[name] for name in ("t", "q", "qd", "tau")}
         arrays["run"] = data["run"] if "run" in data else np.zeros(len(arrays["t"]), dtype=int)
-    return arrays
+    return arrays | {"dropped_rows": np.array(0)}
 
 
 def _read_csv(path: Path) -> dict[str, np.ndarray]:
+    """The columns of an excitation CSV; a truncated or non-finite row dropped with a warning."""
     with path.open(encoding="utf-8") as file:
         header = file.readline().strip().split(",")
     if "t" not in header or "tau1" not in header:
         raise ValueError(f"its first line names {','.join(header[:4])}…, not the excitation "
                          "log's columns run,t,q1..,qd1..,tau1..")  # fmt: skip
-    with warnings.catch_warnings():  # an empty table is the error below, not a warning
-        warnings.simplefilter("ignore", UserWarning)
-        table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    if table.size == 0:
+    rows = numeric_rows(path)[1:]  # the header line read as an empty row
+    if not rows:
         raise ValueError("no data rows after the header line run,t,q1..,qd1..,tau1..")
-    if table.shape[1] != len(header):
-        raise ValueError(f"{table.shape[1]} columns but {len(header)} names in the header")
+    width = common_width(rows)
+    if width != len(header):
+        raise ValueError(f"{width} columns but {len(header)} names in the header")
+    table, whole = as_table(rows, width)
+    keep = whole & np.all(np.isfinite(table), axis=1)
+    table = accept(path, table, keep)
     column = {name: table[:, i] for i, name in enumerate(header)}
     n = sum(1 for name in header if name.startswith("tau"))
     joint_columns = {k: np.column_stack([column[f"{k}{i + 1}"] for i in range(n)])
                      for k in ("q", "qd", "tau")}  # fmt: skip
     run = column.get("run", np.zeros(len(table)))
-    return {"t": column["t"], "run": run.astype(int), **joint_columns}
+    dropped = np.array(len(keep) - keep.sum())
+    return {"t": column["t"], "run": run.astype(int), "dropped_rows": dropped, **joint_columns}

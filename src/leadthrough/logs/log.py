@@ -16,6 +16,9 @@ FloatArray = NDArray[np.float64]
 #: The longest median sample period a robot's log may have [s], 10 Hz (the public UR10e
 #: and Panda logs sample at 100 Hz and 1 kHz): a log timed in milliseconds reads 4–10 s.
 MAX_PERIOD = 0.1
+#: Samples further apart than this have rows missing between them [s]: the safety
+#: supervisor's default ``max_time_gap``; the observer does not run across such a gap.
+MAX_GAP = 0.25
 
 
 def period_problem(period: float) -> str | None:
@@ -110,3 +113,22 @@ class JointLog:
         if self.current is None or torque_constants is None:
             return None
         return np.asarray(self.current, dtype=float) * np.asarray(torque_constants, dtype=float)
+
+    def gaps(self, max_gap: float = MAX_GAP) -> list[tuple[float, float]]:
+        """(last time before, first time after) of each gap longer than ``max_gap`` [s]."""
+        after = np.flatnonzero(np.diff(self.t) > max_gap) + 1
+        return [(float(self.t[k - 1]), float(self.t[k])) for k in after]
+
+    def runs(self, max_gap: float = MAX_GAP) -> list[JointLog]:
+        """The log split at its gaps longer than ``max_gap`` [s]: each run gap-free."""
+        after = np.flatnonzero(np.diff(self.t) > max_gap) + 1
+        bounds = zip([0, *after.tolist()], [*after.tolist(), self.n_samples], strict=True)
+        return [self._rows(slice(start, stop)) for start, stop in bounds]
+
+    def _rows(self, rows: slice) -> JointLog:
+        def cut(values: FloatArray | None) -> FloatArray | None:
+            return None if values is None else values[rows]
+
+        extra = {name: np.asarray(value)[rows] for name, value in self.extra.items()}
+        return JointLog(self.t[rows], self.q[rows], self.qd[rows], cut(self.tau),
+                        cut(self.current), extra, self.source)  # fmt: skip

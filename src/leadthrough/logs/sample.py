@@ -8,6 +8,7 @@ start-up, or a Unix clock of 1.7e9 s).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -55,7 +56,8 @@ def joint_state(
         t: Time stamp of a positional sample [s] (the controller's own clock).
 
     Raises:
-        ParameterError: A JointState with more arguments, or q without qd.
+        ParameterError: A JointState with more arguments, or q without qd. Readings that
+            are not numbers are returned as given: the safety check names them.
     """
     if isinstance(state, JointState):
         if qd is not None or tau_measured is not None:
@@ -63,8 +65,19 @@ def joint_state(
         return state
     if qd is None:
         raise ParameterError("step", "needs a JointState, or q and qd")
-    tau = None if tau_measured is None else np.asarray(tau_measured, dtype=float)
-    return JointState(t, np.asarray(state, dtype=float), np.asarray(qd, dtype=float), tau)
+    tau = None if tau_measured is None else _readings(tau_measured)
+    return JointState(t, _readings(state), _readings(qd), tau)
+
+
+def _readings(value: ArrayLike) -> FloatArray:
+    """``value`` as floats; as given when it is not numbers, for the safety check to name.
+
+    The supervisor's check of the sample then latches the fault, as for a JointState.
+    """
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return cast(FloatArray, value)
 
 
 def enabling_state(value: object) -> bool | None:

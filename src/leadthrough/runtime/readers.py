@@ -10,28 +10,39 @@ Formats (detected from the path and the first line, or named with ``format=``):
 - ``"panda_txt"``: a folder (or one of its files) with ``*_time.txt``, ``*_positions.txt``,
   ``*_velocity.txt``, ``*_torques.txt``: one value per line, the n joints of a sample on
   n consecutive lines; torques from joint torque sensors [Nm].
-- ``"recording"``: the project's own teaching recordings (``.mcap``).
+- ``"recording"``: the project's own teaching recordings (``.mcap``, or the ``.mcap.part``
+  a crashed recorder left); a cut or damaged one is read up to where it breaks, with a
+  warning saying how much was recovered.
 - ``"excitation"``: the project's excitation logs (``.npz``, or ``.csv`` with a header).
 
 Real logs have corrupted rows. A row is dropped when it has the wrong number of columns
 (a truncated last line), a non-finite or physically impossible value (|q| > 4π rad,
 |q̇| > 20 rad/s, |current| > 100 A, |torque| > 5000 Nm: the ``253.0`` and ``1e300``
 rows of UR logs), a joint reading off the run's own path by more than 0.2 rad (a row of
-zeros in a moving log), or a time not after the previous row's. One warning counts the
-dropped rows and names the first ones; a file with more than half its rows dropped is
-an error naming the file.
+zeros in a moving log), or a time out of line with the rows around it (the fewest rows
+are dropped for time to increase: a time stamp that jumped costs its own row, not the
+rows after it). One warning counts the dropped rows and names the first ones; a file
+with more than half its rows dropped is an error naming the file.
 """
 
 from __future__ import annotations
 
+import bisect
 import warnings
 from pathlib import Path
 from typing import Literal
 
 import numpy as np
 
-from leadthrough.errors import LeadthroughError
 from leadthrough.logs.log import FloatArray, JointLog, period_problem
+from leadthrough.logs.rows import (
+    LogError,
+    LogWarning,
+    accept,
+    as_table,
+    common_width,
+    numeric_rows,
+)
 from leadthrough.model.description import RobotDescription
 
 Format = Literal["ur_csv", "panda_txt", "recording", "excitation"]
@@ -42,16 +53,6 @@ _UR_WIDTHS = (19, 25, 31)
 _BOUNDS = {"q": 4.0 * np.pi, "qd": 20.0, "current": 100.0, "torque": 5000.0}
 #: A joint reading farther than this from the run's running median is corrupted [rad].
 _OFF_PATH = 0.2
-#: More than this fraction of rows dropped: the file is not a log.
-_MOSTLY_GARBAGE = 0.5
-
-
-class LogError(LeadthroughError, ValueError):
-    """A file cannot be read as a robot log (the message names the file)."""
-
-
-class LogWarning(UserWarning):
-    """Rows of a log were dropped as corrupted."""
 
 
 def read_log(
@@ -89,7 +90,7 @@ def detect_format(path: Path) -> Format:
     """The format of ``path`` from its name and first line (see the module docstring)."""
     if path.is_dir() or (path.name.startswith("exciting_traj_") and path.suffix == ".txt"):
         return "panda_txt"
-    if path.suffix == ".mcap":
+    if path.suffix == ".mcap" or path.name.endswith(".mcap.part"):
         return "recording"
     if path.suffix == ".npz":
         return "excitation"
@@ -147,21 +148,16 @@ def _with_robot(log: JointLog, robot: RobotDescription) -> JointLog:
 
 
 def _read_ur_csv(path: Path) -> JointLog:
-    rows = _numeric_rows(path)
-    widths = [len(row) for row in rows]
-    width = max(set(widths), key=widths.count) if widths else 0
+    rows = numeric_rows(path)
+    width = common_width(rows)
     if width not in _UR_WIDTHS:
         raise LogError(f"{path}: rows have {width} columns, a UR log has 19, 25 or 31")
-    complete = np.array([len(row) == width for row in rows])
-    table = np.full((len(rows), width), np.nan)
-    for i, row in enumerate(rows):
-        if complete[i]:
-            table[i] = row
+    table, complete = as_table(rows, width)
     targets = ["current"] * 6 + ["torque"] * 6 if width == 31 else ["other"] * 6  # 25: unnamed
     kinds = ["time"] + ["q"] * 6 + ["qd"] * 6 + ["current"] * 6 + targets
     keep = complete & _plausible(table, kinds[:width]) & _on_path(table[:, 1:7], complete)
     keep &= _time_increases(table[:, 0], keep)
-    table = _accept(path, table, keep, len(rows))
+    table = accept(path, table, keep)
     extra = {}
     if width == 25:  # columns 20–25 of these files are not documented: kept, not named
         extra["columns_20_25"] = table[:, 19:25]
@@ -169,23 +165,6 @@ def _read_ur_csv(path: Path) -> JointLog:
         extra["target_current"], extra["target_torque"] = table[:, 19:25], table[:, 25:31]
     return JointLog(table[:, 0], table[:, 1:7], table[:, 7:13], None, table[:, 13:19], extra,
                     str(path), int(len(rows) - keep.sum()))  # fmt: skip
-
-
-def _numeric_rows(path: Path) -> list[list[float]]:
-    """Every non-empty line as floats; an unparsable line becomes an empty row."""
-    try:
-        lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
-    except OSError as error:
-        raise LogError(f"{path}: cannot read ({error})") from None
-    rows = []
-    for line in lines:
-        if not line.strip():
-            continue
-        try:
-            rows.append([float(value) for value in line.split(",")])
-        except ValueError:
-            rows.append([])
-    return rows
 
 
 def _plausible(table: FloatArray, kinds: list[str]) -> np.ndarray:
@@ -211,28 +190,28 @@ def _on_path(q: FloatArray, candidates: np.ndarray, window: int = 9) -> np.ndarr
 
 
 def _time_increases(t: FloatArray, keep: np.ndarray) -> np.ndarray:
-    """``keep`` without the rows whose time is not after the last kept row's."""
-    result = keep.copy()
-    last = -np.inf
-    for i in np.flatnonzero(keep):
-        if t[i] <= last:
-            result[i] = False
+    """``keep`` without the fewest rows that leave time [s] increasing along the rest.
+
+    The longest run of kept rows whose time increases: a row whose time stamp jumped
+    (forward or back) is dropped, not the good rows after it. Built from the last row
+    back, so that of two equally long runs (or two equal times) the earlier rows stay.
+    """
+    heads: list[float] = []  # heads[k]: the latest first time of a run of k + 1 rows
+    starts: list[int] = []  # starts[k]: the row that starts that run
+    following = np.full(len(t), -1)
+    for i in np.flatnonzero(keep)[::-1]:
+        k = bisect.bisect_left(heads, -t[i])  # heads kept negated: ascending for bisect
+        following[i] = starts[k - 1] if k else -1
+        if k == len(heads):
+            heads.append(-t[i])
+            starts.append(int(i))
         else:
-            last = t[i]
+            heads[k], starts[k] = -t[i], int(i)
+    result = np.zeros(len(t), dtype=bool)
+    row = starts[-1] if starts else -1
+    while row >= 0:
+        result[row], row = True, following[row]
     return result
-
-
-def _accept(path: Path, table: FloatArray, keep: np.ndarray, total: int) -> FloatArray:
-    """The kept rows; a warning for the dropped ones, an error if they are most."""
-    dropped = np.flatnonzero(~keep)
-    if total == 0 or dropped.size > _MOSTLY_GARBAGE * total:
-        raise LogError(f"{path}: {dropped.size} of {total} rows are corrupted: not a usable log")
-    if dropped.size:
-        first = ", ".join(str(i + 1) for i in dropped[:5])
-        more = ", …" if dropped.size > 5 else ""
-        warnings.warn(f"{path}: dropped {dropped.size} of {total} rows as corrupted "
-                      f"(rows {first}{more})", LogWarning, stacklevel=4)  # fmt: skip
-    return table[keep]
 
 
 # --- Panda text ------------------------------------------------------------------------
@@ -261,7 +240,7 @@ def _read_panda_txt(path: Path) -> JointLog:
     kinds = ["time"] + ["q"] * n + ["qd"] * n + ["torque"] * n
     keep = _plausible(table, kinds)
     keep = _time_increases(t, keep & _on_path(q, keep))
-    table = _accept(folder, table, keep, t.size)
+    table = accept(folder, table, keep)
     return JointLog(table[:, 0], table[:, 1:1 + n], table[:, 1 + n:1 + 2 * n],
                     table[:, 1 + 2 * n:], source=str(folder),
                     dropped_rows=int(t.size - keep.sum()))  # fmt: skip
@@ -288,6 +267,8 @@ def _read_recording(path: Path) -> JointLog:
         recording = read_recording(path)
     except RecordingError as error:
         raise LogError(str(error)) from None
+    if not recording.complete:  # a cut, damaged or unfinished file: the user is told how much
+        warnings.warn(f"{path}: {recording.recovery}", LogWarning, stacklevel=3)
     extra = {"tau_ext_hat": recording.tau_ext_hat, "tau_ext_std": recording.tau_ext_std}
     return JointLog(recording.t, recording.q, recording.qd, recording.tau, None, extra,
                     str(path))  # fmt: skip
@@ -303,4 +284,5 @@ def _read_excitation(path: Path) -> JointLog:
     if len(runs) != 1:
         raise LogError(f"{path}: holds {len(runs)} runs; read them with friction.logs.load_logs")
     run = runs[0]
-    return JointLog(run["t"], run["q"], run["qd"], run["tau"], source=str(path))
+    return JointLog(run["t"], run["q"], run["qd"], run["tau"], source=str(path),
+                    dropped_rows=run["dropped_rows"])  # fmt: skip

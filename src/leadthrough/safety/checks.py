@@ -75,17 +75,23 @@ def time_problem(t: object, previous: float | None, max_gap: float | None) -> st
     Args:
         t: The time stamp [s].
         previous: The previous sample's [s] (None: none since the start or a reset).
-        max_gap: The longest a sample may come after the one before [s]
+        max_gap: The longest a sample may come after the one before, or before it [s]
             (``SafetyParameters.max_time_gap``; None: any). A stamp that repeats or goes
-            back is taken as it is (a driver's clock may be coarse).
+            back by less is taken as it is (a driver's clock may be coarse).
     """
     value = seconds(t)
     if value is None:
         return f"time stamp {t!r} is not a finite number"
-    if previous is not None and max_gap is not None and value - previous > max_gap:
+    if previous is None or max_gap is None:
+        return None
+    if value - previous > max_gap:
         return (f"time stamp jumped {value - previous:.4g} s, from {previous:.6f} to "
                 f"{value:.6f} s (more than max_time_gap {max_gap:g} s): samples lost, or a "
                 "clock not in seconds")  # fmt: skip
+    if previous - value > max_gap:
+        return (f"time stamp stepped back {previous - value:.4g} s, from {previous:.6f} to "
+                f"{value:.6f} s (more than max_time_gap {max_gap:g} s): the robot's clock "
+                "was reset")  # fmt: skip
     return None
 
 

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from leadthrough.errors import ParameterError
+from leadthrough.logs.log import MAX_GAP
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.validation import real
 
@@ -33,7 +34,8 @@ class SafetyParameters:
         velocity_reading_margin: Velocities beyond this × the speed limit are out of range.
         position_reading_margin: Positions this far beyond the hard limits are out of range [rad].
         safe_stop_damping_time: Duration of the damped hold after a fault [s], then no damping.
-        max_time_gap: A sample stamped more than this after the one before is a fault [s]:
+        max_time_gap: A sample stamped more than this after the one before (or before
+            it: a clock reset) is a fault [s]:
             samples lost (the arm ran on its last command meanwhile), or a clock not in
             seconds (a driver stamping milliseconds jumps 4 s a period at 250 Hz, and the
             start-up calibration's integral took it whole: a kick to the torque limits).
@@ -53,7 +55,7 @@ class SafetyParameters:
     velocity_reading_margin: float = 2.0
     position_reading_margin: float = 0.1
     safe_stop_damping_time: float = 0.5
-    max_time_gap: float | None = 0.25
+    max_time_gap: float | None = MAX_GAP
 
     def __post_init__(self) -> None:
         for name in ("tool_speed_limit", "braking_time", "soft_limit_margin", "wall_damping_time"):

@@ -82,8 +82,11 @@ class SafetySupervisor:
     Args:
         dynamics: Model of the arm (limits, M(q), G(q), TCP Jacobian); replace it with
             :meth:`use_model`, which keeps ``robot`` and the bounds in step.
-        dt: Control period [s].
+        dt: Control period [s], at most ``parameters.max_time_gap``.
         parameters: Safety settings (read once, here, with the robot's limits).
+
+    Raises:
+        ParameterError: ``dt`` not a positive number, or longer than ``max_time_gap``.
     """
 
     #: Run the sample check and the command path compiled (:meth:`.checks.FrozenEncoders.count`,
@@ -97,6 +100,10 @@ class SafetySupervisor:
         self.n = dynamics.n
         self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
         self.parameters = parameters or SafetyParameters()
+        gap = self.parameters.max_time_gap
+        if gap is not None and self.dt > gap:  # each period would be a time stamp jump
+            raise ParameterError("dt", f"{self.dt:g} s is longer than the safety's max_time_gap "
+                                       f"{gap:g} s: every period would be a fault")  # fmt: skip
         self.use_model(dynamics)
         self._encoders = FrozenEncoders(self.n, self.parameters.stale_periods,
                                        self.parameters.stale_speed)  # fmt: skip
