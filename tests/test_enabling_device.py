@@ -228,7 +228,7 @@ def taken_as_calibrated(monkeypatch):
 
 
 def test_held_active_mode_compensates_the_friction_surely_there(yumi, taken_as_calibrated):
-    """Held: ``held_fraction`` (1) of τ_C under the ceiling; else the thesis' ε = 0.7."""
+    """``held_fraction = 1``, held: τ_C under the ceiling; else the thesis' ε = 0.7."""
     held, level, ceiling = _sliding_compensation(yumi, "active", True)
     np.testing.assert_allclose(held, np.minimum(level, ceiling), rtol=1e-4, atol=1e-9)
     for enabling in (None, False):  # no device; released (the controller sends gravity alone)
@@ -244,8 +244,9 @@ def test_held_passive_mode_keeps_the_thesis_law(yumi, taken_as_calibrated):
     np.testing.assert_allclose(held, np.minimum(0.7 * level, ceiling), rtol=1e-4, atol=1e-9)
 
 
-def test_held_fraction_none_keeps_the_thesis_fraction(yumi, taken_as_calibrated):
-    """``held_fraction = None``: ε is ``fraction`` whatever the device says."""
+def test_by_default_held_keeps_the_thesis_fraction(yumi, taken_as_calibrated):
+    """``held_fraction = None`` (the default): ε is ``fraction`` whatever the device says."""
+    assert CoulombCompensationParameters().held_fraction is None
     held, _, _ = _sliding_compensation(yumi, "active", True, held_fraction=None)
     thesis, _, _ = _sliding_compensation(yumi, "active", None)
     np.testing.assert_allclose(held, thesis, atol=1e-12)
@@ -258,17 +259,18 @@ def test_a_held_fraction_outside_0_1_is_refused(value):
         CoulombCompensationParameters(held_fraction=value)
 
 
-def test_held_the_thesis_fraction_costs_effort(released_with_the_device):
-    """As found: ε = 0.7 kept while held; the same hand pulls harder, the arm stops alike."""
+def test_held_at_the_ceiling_it_guides_lighter_and_stops(released_with_the_device):
+    """``held_fraction = 1``: the same hand pulls at most 0.9 of ε = 0.7's; the release stops."""
     parameters = lt.LeadThroughParameters()
-    thesis = dataclasses.replace(parameters, compensation=dataclasses.replace(
-        parameters.compensation, held_fraction=None))  # fmt: skip
+    ceiling = dataclasses.replace(parameters, compensation=dataclasses.replace(
+        parameters.compensation, held_fraction=1.0))  # fmt: skip
 
     def factory(robot, mode):
-        return lt.LeadThrough(robot, mode=mode, parameters=thesis, calibrate=True)
+        return lt.LeadThrough(robot, mode=mode, parameters=ceiling, calibrate=True)
 
-    kept = run_case(RELEASED_ON_THE_WAY, "active", factory)
-    assert released_with_the_device.rms_force <= 0.9 * kept.rms_force
+    held = run_case(RELEASED_ON_THE_WAY, "active", factory)
+    assert held.rms_force <= 0.9 * released_with_the_device.rms_force
+    assert held.stop_time <= 0.5 and held.drift < 1e-3
 
 
 @pytest.mark.parametrize("mode", ["passive", "active"])

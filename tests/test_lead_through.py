@@ -303,3 +303,20 @@ def test_the_recorder_keeps_each_periods_values_not_the_controllers_buffers(yumi
     estimate = recorder.arrays()["estimate"]
     assert np.ptp(estimate, axis=0).max() > 0.0
     assert estimate[0] is not estimate[-1]
+
+
+def test_positional_samples_go_on_from_the_latest_stamp(yumi):
+    """A session that switches from stamped to positional samples: its clock goes on.
+
+    As found: the positional form counted from 0 whatever the robot had stamped, so the
+    first positional sample after 2 s of stamped ones read as a clock stepped back 2 s.
+    """
+    ctl = LeadThrough(yumi, mode="passive")
+    q, qd = yumi.home(), np.zeros(yumi.n_joints)
+    gravity = lt.Dynamics(yumi).gravity(q)
+    noise = np.random.default_rng(0).normal(0.0, 0.01, (501, yumi.n_joints))  # never stale
+    for k in range(500):
+        ctl.step(lt.JointState(0.004 * k, q, qd, gravity + noise[k]))
+    ctl.step(q, qd, gravity + noise[500])
+    assert ctl.state == "teaching"
+    assert ctl.time == pytest.approx(0.004 * 499 + ctl.dt)

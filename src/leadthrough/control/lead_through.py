@@ -492,10 +492,13 @@ class LeadThrough:
         """(t, q, q̇, τ) of this period; the positional form counts periods of ``dt``.
 
         ``t`` as the robot stamped it: the supervisor judges it (a number, finite, no
-        gap), and :attr:`time` takes it only if it is a finite number.
+        gap, no step back), and :attr:`time` takes it only if it is a finite number. The
+        positional form's clock goes on from the latest stamp (a session that switches
+        from ``JointState`` to positional samples is not a clock that stepped back).
         """
         if not isinstance(state, JointState):
-            self._own_clock += self.dt
+            latest = self._t if math.isfinite(self._t) else self._own_clock
+            self._own_clock = latest + self.dt
         sample = joint_state(state, qd, tau, self._own_clock)
         stamp = seconds(sample.t)
         if stamp is not None:

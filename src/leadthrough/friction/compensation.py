@@ -80,15 +80,19 @@ class CoulombCompensationParameters:
             law lets go of its friction margin). The thesis' 0.7 leaves 30 % of the
             friction so that a released arm stops; the device says when the hand lets go,
             and the controller then sends gravity alone, so while it is held the
-            compensation is the friction surely there (the ceiling, ``(1 − e) τ_C`` less
-            the gravity error that may be, caps it). None keeps ``fraction``.
+            compensation may be the friction surely there (1: the ceiling, ``(1 − e) τ_C``
+            less the gravity error that may be, caps it). None (the default) keeps
+            ``fraction``: 1 is lighter on the YuMi's plants whose friction was identified
+            first (0.35 of passive's effort against 0.47) but shakes more where the
+            level's stated error is less sure (the nominal model's tail case 1.40 → 1.96×
+            passive; the UR10e's 1.71 → 2.16; README, *An enabling device*).
     """
 
     fraction: float = 0.7
     dead_band: float = 0.003
     full_velocity: float = 0.01
     follow_push: str = "calibrated"
-    held_fraction: float | None = 1.0
+    held_fraction: float | None = None
 
     def __post_init__(self) -> None:
         if isinstance(self.follow_push, bool):  # TOML's true / false
