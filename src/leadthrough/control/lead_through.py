@@ -680,9 +680,10 @@ class LeadThrough:
         """ε this period [–]: ``held_fraction`` while the law takes the device as held.
 
         Held on a calibrated model, the released arm's stop is the device's (gravity alone
-        once it is let go), not the friction the thesis' ε leaves: active mode then
-        compensates the friction surely there (``CoulombCompensationParameters``). Passive
-        mode keeps the thesis' law, with or without a device.
+        once it is let go), not the friction the thesis' ε leaves: active mode may then
+        compensate more of it, up to the ceiling (``CoulombCompensationParameters``; None,
+        the default, keeps the thesis' ε). Passive mode keeps the thesis' law, with or
+        without a device.
         """
         compensation = self.parameters.compensation
         held = compensation.held_fraction
