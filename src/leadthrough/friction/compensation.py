@@ -83,9 +83,9 @@ class CoulombCompensationParameters:
             compensation may be the friction surely there (1: the ceiling, ``(1 − e) τ_C``
             less the gravity error that may be, caps it). None (the default) keeps
             ``fraction``: 1 is lighter on the YuMi's plants whose friction was identified
-            first (0.35 of passive's effort against 0.47) but shakes more where the
-            level's stated error is less sure (the nominal model's tail case 1.40 → 1.96×
-            passive; the UR10e's 1.71 → 2.16; README, *An enabling device*).
+            first (0.35 of passive's effort against 0.47) but shakes more in other cases
+            (the nominal model's tail case 1.40 → 1.96× passive; the UR10e's relaxed
+            circles 1.71 → 2.16; README, *An enabling device*).
     """
 
     fraction: float = 0.7
