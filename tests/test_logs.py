@@ -146,6 +146,24 @@ def test_an_excitation_csv_drops_and_counts_a_nan_row_and_a_truncated_last_line(
     np.testing.assert_allclose(log.t, np.delete(t, 20))
 
 
+def test_an_excitation_npz_drops_and_counts_its_nan_rows_as_the_csv_does(tmp_path):
+    """save_logs' NPZ with a NaN and an Inf row: both dropped, one warning (they passed)."""
+    from leadthrough.friction.logs import load_logs, save_logs
+
+    t = np.arange(50) * 0.004
+    run = {"t": t, "q": np.outer(t, [1.0, 2.0]), "qd": np.ones((50, 2)), "tau": np.ones((50, 2))}
+    run["q"][20, 1], run["tau"][30, 0] = np.nan, np.inf
+    path = save_logs([run], tmp_path / "mine.npz")
+    dropped = r"mine\.npz: dropped 2 of 50 rows as corrupted \(rows 21, 31\)"
+    with pytest.warns(LogWarning, match=dropped):
+        log = lt.read_log(path)
+    assert log.n_samples == 48 and log.dropped_rows == 2 and np.all(np.isfinite(log.tau))
+    np.testing.assert_allclose(log.t, np.delete(t, [20, 30]))
+    with pytest.warns(LogWarning, match=dropped):
+        (loaded,) = load_logs(path)
+    assert loaded["dropped_rows"] == 2 and np.all(np.isfinite(loaded["q"]))
+
+
 @pytest.mark.parametrize("keep", [0.0, 0.5], ids=["empty", "truncated"])
 def test_a_truncated_or_empty_npz_is_a_log_error_naming_it(tmp_path, keep):
     """An .npz cut short (or empty) is a one-line LogError naming the file, no traceback."""
