@@ -99,7 +99,7 @@ def _is_joint_list(text: str) -> bool:
         joints = [int(item) for item in text.split(",") if item.strip()]
     except ValueError:
         return False
-    return bool(joints) and all(1 <= j <= 7 for j in joints)
+    return bool(joints) and all(1 <= j <= 7 for j in joints) and len(set(joints)) == len(joints)
 
 
 def _value(valid) -> st.SearchStrategy[str]:
@@ -225,6 +225,23 @@ def test_twin_options_on_a_real_arms_runs_are_refused(workdir, option, flag):
     assert_one_line_error(status, err)
     assert f"{flag}: applies to the twin" in err
     assert not (workdir / "saved.csv").exists()
+
+
+@pytest.mark.parametrize(
+    ("argv", "says"),
+    [(["--joints", "1,1"], "joints: joint 1 is given twice in '1,1'"),
+     (["--joints", "4,2,4"], "joint 4 is given twice"),
+     (["--log", "taught.mcap", "taught.mcap"], "--log: taught.mcap is given twice"),
+     (["--log", "taught.mcap", "./adir/../taught.mcap"], "--log: adir/../taught.mcap is given"),
+     (["--log", "taught.mcap", "--held-out", "taught.mcap"],
+      "--held-out: taught.mcap is also a --log run")],
+    ids=lambda value: value if isinstance(value, str) else " ".join(value),
+)  # fmt: skip
+def test_a_joint_or_run_given_twice_is_refused(workdir, argv, says):
+    """``identify --joints 1,1`` or a run named twice: one line, nothing fitted (they ran twice)."""
+    status, _, err = run(["identify", *argv], workdir)
+    assert_one_line_error(status, err)
+    assert says in err
 
 
 def test_a_folder_that_cannot_be_written_is_one_line(workdir):

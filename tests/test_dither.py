@@ -62,6 +62,35 @@ def test_default_wave_is_15_hz_and_zero_mean(friction):
     np.testing.assert_array_equal(np.sign(torque[:17, 0]), [1.0] * 9 + [-1.0] * 8)
 
 
+@pytest.mark.parametrize(
+    ("frequency", "mean"),
+    [(15.0, 0.0), (62.5, 0.0), (20.0, 1 / 25), (50.0, 1 / 5), (100.0, 1 / 5), (250 / 3, 1 / 3)],
+)
+def test_the_wave_averages_one_over_r_where_f_dt_is_p_over_an_odd_r(friction, frequency, mean):
+    """Below Nyquist the long-run mean is 1/r for f·dt = p/r with r odd, else 0 (check_period)."""
+    dither = Dither(friction, DT, DitherParameters.never_parked(frequency=frequency))
+    wave = run_still(dither, 3000)[:, 0] / (0.3 * friction.coulomb[0])  # 3000: every r's multiple
+    assert wave.mean() == pytest.approx(mean, abs=1e-12)
+
+
+@pytest.mark.parametrize(("frequency", "dt"), [(125.0, DT), (250.0, DT), (15.0, 0.04),
+                                               (15.0, 1 / 30)])  # fmt: skip
+def test_a_frequency_at_or_above_nyquist_is_refused_when_built(friction, frequency, dt):
+    """A frequency ≥ 1/(2 dt) is refused by the dither and the controller (at 1/dt: constant)."""
+    says = rf"dither frequency: {frequency:g} Hz at dt = {dt:g} s .* Nyquist limit"
+    with pytest.raises(ParameterError, match=says):
+        Dither(friction, dt, DitherParameters(frequency=frequency))
+    parameters = lt.LeadThroughParameters(dither=DitherParameters(frequency=frequency))
+    with pytest.raises(ParameterError, match=says):
+        lt.LeadThrough(lt.robots.yumi(), dt=dt, parameters=parameters)
+
+
+@pytest.mark.parametrize("dt", [0.008, 0.01, 0.03])
+def test_slower_controllers_keep_the_default_dither(dt):
+    """125, 100 and 33 Hz controllers (the benchmarks' slower rates) build with the defaults."""
+    assert lt.LeadThrough(lt.robots.yumi(), dt=dt).feed_forward.dither is not None
+
+
 @pytest.mark.parametrize("amplitude", [0.3, 0.1, 0.95])
 def test_amplitude_is_fraction_of_coulomb_level(friction, amplitude):
     """|dither| = amplitude · τ_C on every joint at rest."""

@@ -9,6 +9,7 @@ import leadthrough as lt
 from leadthrough.errors import InputShapeError
 from leadthrough.experiments.real_logs import supervisor_verdict
 from leadthrough.friction.identification import IdentificationError
+from leadthrough.logs.log import rate_ratio
 from leadthrough.runtime.readers import LogError, LogWarning, detect_format
 from leadthrough.runtime.recording import SessionRecorder
 from realdata import REALDATA, needs_realdata
@@ -146,6 +147,24 @@ def test_an_excitation_csv_drops_and_counts_a_nan_row_and_a_truncated_last_line(
     np.testing.assert_allclose(log.t, np.delete(t, 20))
 
 
+def test_an_excitation_npz_drops_and_counts_its_nan_rows_as_the_csv_does(tmp_path):
+    """save_logs' NPZ with a NaN and an Inf row: both dropped, one warning (they passed)."""
+    from leadthrough.friction.logs import load_logs, save_logs
+
+    t = np.arange(50) * 0.004
+    run = {"t": t, "q": np.outer(t, [1.0, 2.0]), "qd": np.ones((50, 2)), "tau": np.ones((50, 2))}
+    run["q"][20, 1], run["tau"][30, 0] = np.nan, np.inf
+    path = save_logs([run], tmp_path / "mine.npz")
+    dropped = r"mine\.npz: dropped 2 of 50 rows as corrupted \(rows 21, 31\)"
+    with pytest.warns(LogWarning, match=dropped):
+        log = lt.read_log(path)
+    assert log.n_samples == 48 and log.dropped_rows == 2 and np.all(np.isfinite(log.tau))
+    np.testing.assert_allclose(log.t, np.delete(t, [20, 30]))
+    with pytest.warns(LogWarning, match=dropped):
+        (loaded,) = load_logs(path)
+    assert loaded["dropped_rows"] == 2 and np.all(np.isfinite(loaded["q"]))
+
+
 @pytest.mark.parametrize("keep", [0.0, 0.5], ids=["empty", "truncated"])
 def test_a_truncated_or_empty_npz_is_a_log_error_naming_it(tmp_path, keep):
     """An .npz cut short (or empty) is a one-line LogError naming the file, no traceback."""
@@ -176,6 +195,34 @@ def test_a_cut_or_unfinished_recording_reads_with_a_warning_saying_how_much(tmp_
     cut.write_bytes(path.read_bytes()[: int(0.6 * path.stat().st_size)])
     with pytest.warns(LogWarning, match=r"cut\.mcap: recovered .* without its summary"):
         assert 0 < lt.read_log(cut).n_samples < 500
+
+
+@pytest.mark.parametrize(("divided", "says"), [(60.0, "60× too fast"), (1000.0, "1000× too fast")])
+def test_a_log_whose_clock_runs_too_fast_for_its_velocities_is_refused(tmp_path, divided, says):
+    """Time divided by 60 or 1000 (``inspect`` read "6000 Hz"): dq/dt is 60× q̇, one line."""
+    table = _ur_rows(200, 31)
+    assert lt.read_log(_write(tmp_path / "s.csv", table)).n_samples == 200  # in seconds: read
+    table[:, 0] /= divided
+    with pytest.raises(LogError, match=rf"fast\.csv: its time column runs {says} for its q̇"):
+        lt.read_log(_write(tmp_path / "fast.csv", table))
+    log = {"t": table[:, 0], "q": table[:, 1:7], "qd": table[:, 7:13], "tau": table[:, 13:19],
+           "source": "fast.csv"}  # fmt: skip
+    with pytest.raises(IdentificationError, match=rf"fast\.csv: its time column runs {says}"):
+        lt.identify_friction(log, lt.robots.ur10e())
+
+
+@needs_realdata
+def test_every_real_log_has_its_velocities_within_3_percent_of_dq_dt():
+    """q̇ / (dq/dt) where the joints move is 0.977–1.001 on the real logs: far inside 3×."""
+    paths = [*sorted((REALDATA / "ur10e").glob("*/*.csv")), REALDATA / "panda_gaz2019"]
+    ratios = {}
+    for path in paths:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", LogWarning)  # the corrupted run's dropped rows
+            log = lt.read_log(path)
+        ratios[path.name] = rate_ratio(log.t, log.q, log.qd)
+    measured = [ratio for ratio in ratios.values() if ratio is not None]
+    assert len(measured) >= 35 and all(abs(ratio - 1.0) < 0.03 for ratio in measured), ratios
 
 
 @needs_realdata

@@ -32,7 +32,28 @@ def parse_joints(text: str | None, n: int) -> list[int] | None:
     bad = [j + 1 for j in joints if not 0 <= j < n]
     if bad or not joints:
         raise ParameterError("joints", f"joints are numbered 1 to {n}, got {text!r}")
+    twice = [j + 1 for k, j in enumerate(joints) if j in joints[:k]]
+    if twice:
+        raise ParameterError("joints", f"joint {twice[0]} is given twice in {text!r} "
+                                       "(each joint is identified once)")  # fmt: skip
     return joints
+
+
+def refuse_repeated_runs(logs: Sequence[Path], held_out: Sequence[Path] = ()) -> None:
+    """Refuse a run named twice in ``--log`` and ``--held-out`` (the same file, however spelt).
+
+    Raises:
+        ParameterError: A ``--log`` run given twice (it would be fitted twice), or a
+            ``--held-out`` one given twice or fitted too.
+    """
+    seen: dict[Path, str] = {}
+    for option, path in [*(("--log", p) for p in logs), *(("--held-out", p) for p in held_out)]:
+        key = Path(path).resolve()
+        if key in seen:
+            where = "given twice" if seen[key] == option else f"also a {seen[key]} run"
+            raise ParameterError(option, f"{path} is {where} (each run is fitted or held out "
+                                         "once)")  # fmt: skip
+        seen[key] = option
 
 
 def identify(

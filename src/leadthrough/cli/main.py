@@ -53,8 +53,15 @@ _EPILOG_IDENTIFY = """examples:
 
 
 def _identify(args: argparse.Namespace) -> int:
-    from leadthrough.cli.identify import identify, identify_real, parse_joints, real_logs
+    from leadthrough.cli.identify import (
+        identify,
+        identify_real,
+        parse_joints,
+        real_logs,
+        refuse_repeated_runs,
+    )
 
+    refuse_repeated_runs(args.log or [], args.held_out)
     if args.held_out and not args.log:
         raise ParameterError("--held-out", "needs --log (the runs to fit)")
     if args.realdata is not None and args.log:

@@ -105,6 +105,28 @@ class DitherParameters:
         amplitude = ACTIVE_AMPLITUDE if mode == "active" else PASSIVE_AMPLITUDE
         return dataclasses.replace(self, amplitude=amplitude)
 
+    def check_period(self, dt: float) -> None:
+        """Refuse a ``frequency`` the control period ``dt`` [s] cannot carry.
+
+        The wave takes, at each sample ``t = k dt``, the sign of the half-period it falls
+        in (:meth:`Dither.clock`): half-periods are not whole control periods. With
+        ``f dt = p/r`` in lowest terms the samples repeat every ``r`` periods and average
+        ``1/r`` of the amplitude for an odd ``r``, 0 for an even one (irrational: 0 in the
+        long run). At ``f ≥ 1/(2 dt)``, the Nyquist limit, the samples are another wave:
+        at the limit every sample is on an edge (its sign a matter of clock jitter), above
+        it an alias at ``|f − m/dt|``, a constant torque when ``f dt`` is whole.
+
+        Raises:
+            ParameterError: ``frequency`` at or above ``1/(2 dt)`` (within the clock's
+                1e-4 half-period).
+        """
+        limit = 0.5 / dt
+        if 2.0 * self.frequency * dt > 1.0 - 1e-4:
+            raise ParameterError("dither frequency", f"{self.frequency:g} Hz at dt = {dt:g} s "
+                                 f"is not below the Nyquist limit 1/(2 dt) = {limit:g} Hz: "
+                                 "sampled every dt, the square wave becomes another wave, "
+                                 "a constant torque where f·dt is whole")  # fmt: skip
+
     @classmethod
     def never_parked(cls, **changes: float) -> DitherParameters:
         """The thesis' dither (§5.3): on at rest for ever, neither a time nor a creep parks it.
@@ -125,6 +147,10 @@ class Dither:
         friction: Model whose Coulomb levels set the amplitudes.
         dt: Control period [s].
         parameters: Dither settings.
+
+    Raises:
+        ParameterError: A frequency at or above the Nyquist limit of ``dt``
+            (:meth:`DitherParameters.check_period`).
     """
 
     def __init__(
@@ -135,6 +161,7 @@ class Dither:
         self.amplitude = float(self.parameters.amplitude or 0.0)
         self.friction = friction
         self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
+        self.parameters.check_period(self.dt)
         self.reset()
 
     def reset(self) -> None:

@@ -51,7 +51,7 @@ from leadthrough.errors import LeadthroughError
 from leadthrough.filters import low_pass_signal, pole
 from leadthrough.friction.along_travel import level_along_travel, level_error
 from leadthrough.friction.model import FrictionModel, level_stays_positive, sigmoid
-from leadthrough.logs.log import period_problem
+from leadthrough.logs.log import period_problem, rate_problem
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 
@@ -296,7 +296,7 @@ def _log_samples(
     if np.any(np.diff(t) <= 0):
         raise IdentificationError(f"{label}: 't' must increase strictly")
     period = float(np.median(np.diff(t)))
-    problem = period_problem(period)
+    problem = period_problem(period) or rate_problem(t, q, qd)
     if problem is not None:
         raise IdentificationError(f"{label}: {problem}")
     smoothing = pole(period)  # the thesis' 7.8 ms at the log's rate

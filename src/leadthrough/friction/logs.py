@@ -3,8 +3,9 @@
 Both formats carry the same columns: ``run`` (an integer per sample naming the run),
 ``t`` [s], then per joint ``q{i}`` [rad], ``qd{i}`` [rad/s], ``tau{i}`` [Nm, arm side]
 (i = 1…n). In NPZ the arrays are ``run`` (N,), ``t`` (N,), ``q``, ``qd``, ``tau`` (N, n).
-A CSV row that is cut short, unreadable or not finite is dropped with one
-:class:`~leadthrough.logs.rows.LogWarning` counting them, as the readers of robot logs do.
+A row that is not finite (NPZ or CSV), or a CSV row cut short or unreadable, is dropped
+with one :class:`~leadthrough.logs.rows.LogWarning` counting them, as the readers of robot
+logs do.
 """
 
 from __future__ import annotations
@@ -81,10 +82,17 @@ def _stack(logs: Sequence) -> dict[str, np.ndarray]:
 
 
 def _read_npz(path: Path) -> dict[str, np.ndarray]:
+    """The arrays of an excitation NPZ; a row with a value not finite dropped with a warning."""
     with path.open("rb") as file, np.load(file) as data:  # closed when not a zip too
         arrays = {name: data[name] for name in ("t", "q", "qd", "tau")}
         arrays["run"] = data["run"] if "run" in data else np.zeros(len(arrays["t"]), dtype=int)
-    return arrays | {"dropped_rows": np.array(0)}
+    table = np.column_stack([arrays[name] for name in ("run", "t", "q", "qd", "tau")])
+    table = table.astype(float)  # text arrays: a ValueError, which names the file
+    keep = np.all(np.isfinite(table), axis=1)
+    if not keep.all():
+        accept(path, table, keep)  # the warning counting the dropped rows; mostly NaN: an error
+    kept = {name: value[keep] for name, value in arrays.items()}
+    return kept | {"dropped_rows": np.array(keep.size - keep.sum())}
 
 
 def _read_csv(path: Path) -> dict[str, np.ndarray]:

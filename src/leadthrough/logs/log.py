@@ -16,6 +16,14 @@ FloatArray = NDArray[np.float64]
 #: The longest median sample period a robot's log may have [s], 10 Hz (the public UR10e
 #: and Panda logs sample at 100 Hz and 1 kHz): a log timed in milliseconds reads 4–10 s.
 MAX_PERIOD = 0.1
+#: dq/dt over the time column exceeds the logged q̇ (median, where the joints move) by at
+#: most this factor [–]; on the public UR10e and Panda logs by at most 2.3 % (a time column
+#: divided by 60 or 1000: 60 or 1000).
+RATE_TOLERANCE = 3.0
+#: Fewest samples (of all joints) logged faster than ``MOVING_SPEED`` for that comparison.
+MIN_MOVING = 10
+#: A joint moves, for that comparison, where its logged |q̇| exceeds this [rad/s].
+MOVING_SPEED = 0.05
 #: Samples further apart than this have rows missing between them [s]: the safety
 #: supervisor's default ``max_time_gap``; the observer does not run across such a gap.
 MAX_GAP = 0.25
@@ -27,6 +35,46 @@ def period_problem(period: float) -> str | None:
         return (f"samples {period:.4g} s apart (median): is its time in milliseconds? "
                 f"A robot's log samples every {MAX_PERIOD:g} s or faster")  # fmt: skip
     return None
+
+
+def rate_ratio(t: FloatArray, q: FloatArray, qd: FloatArray) -> float | None:
+    """The median of |q̇| / |dq/dt| where the joints move: 1 for a log timed in seconds.
+
+    A median: an angle that wraps or a driver that stalls (q̇ held, q still) moves it by
+    the few samples concerned only.
+
+    Args:
+        t: Sample times [s], shape (N,), increasing.
+        q: Joint readings [rad], shape (N, n).
+        qd: Logged joint velocities [rad/s], shape (N, n).
+
+    Returns:
+        None when fewer than :data:`MIN_MOVING` samples move faster than :data:`MOVING_SPEED`.
+    """
+    if len(t) < 3:
+        return None
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rate = np.abs(np.gradient(q, t, axis=0))
+        moving = (np.abs(qd) > MOVING_SPEED) & np.isfinite(rate)
+        if np.count_nonzero(moving) < MIN_MOVING:
+            return None
+        return float(np.median(np.abs(qd[moving]) / rate[moving]))
+
+
+def rate_problem(t: FloatArray, q: FloatArray, qd: FloatArray) -> str | None:
+    """Why the time column ``t`` runs too fast to be in seconds by the log's q̇, else None.
+
+    A time column divided by 60 or 1000 has a plausible sample period (a fast clock
+    passes :func:`period_problem`), but its dq/dt is 60 or 1000 times the logged q̇. A
+    clock too slow is :func:`period_problem`'s; a q̇ above dq/dt is also a stalled
+    driver's, which ``inspect`` reports. Arguments as :func:`rate_ratio`'s.
+    """
+    ratio = rate_ratio(t, q, qd)
+    if ratio is None or ratio >= 1.0 / RATE_TOLERANCE:
+        return None
+    return (f"its time column runs {1.0 / ratio:.0f}× too fast for its q̇ (dq/dt against the "
+            f"logged q̇ where the joints move): is it in seconds? A robot's agree within "
+            f"{RATE_TOLERANCE:g}×")  # fmt: skip
 
 
 @dataclass(frozen=True, eq=False)

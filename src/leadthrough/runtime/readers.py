@@ -34,7 +34,7 @@ from typing import Literal
 
 import numpy as np
 
-from leadthrough.logs.log import FloatArray, JointLog, period_problem
+from leadthrough.logs.log import FloatArray, JointLog, period_problem, rate_problem
 from leadthrough.logs.rows import (
     LogError,
     LogWarning,
@@ -70,7 +70,9 @@ def read_log(
     Raises:
         LogError: No such file, an unknown format (a UR-wide CSV with a header row
             included), a file that is mostly garbage, or samples further apart than
-            :data:`~leadthrough.logs.log.MAX_PERIOD` (time not in seconds).
+            :data:`~leadthrough.logs.log.MAX_PERIOD`, or a dq/dt over the time column more
+            than :data:`~leadthrough.logs.log.RATE_TOLERANCE` times the logged q̇ (time not
+            in seconds).
     """
     path = Path(path)
     if not path.exists():
@@ -126,8 +128,9 @@ def _numeric(line: str) -> bool:
 
 
 def _plausible_period(log: JointLog) -> JointLog:
-    """``log``, unless its median sample period says its time is not in seconds."""
+    """``log``, unless its sample period or its q̇ says its time is not in seconds."""
     problem = period_problem(log.median_period) if log.n_samples > 2 else None
+    problem = problem or rate_problem(log.t, log.q, log.qd)
     if problem is not None:
         raise LogError(f"{log.source}: {problem}")
     return log
