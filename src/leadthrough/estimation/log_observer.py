@@ -308,7 +308,13 @@ def detect_contacts(
     Raises:
         LogInputError: No torque in the log, a joint count that does not match, too short.
     """
-    runs = observe_runs(log, robot, friction, uncertainty)
+    return events_of(observe_runs(log, robot, friction, uncertainty), parameters)
+
+
+def events_of(
+    runs: Sequence[ObservedLog], parameters: ContactParameters | None = None
+) -> list[ContactEvent]:
+    """The contacts of each observed run (:func:`run_detector`), in time order."""
     return [event for run in runs for event in run_detector(run, parameters)]
 
 

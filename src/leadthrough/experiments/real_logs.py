@@ -20,11 +20,11 @@ from leadthrough.estimation.contacts import ContactEvent, ContactParameters
 from leadthrough.estimation.log_observer import (
     ModelUncertainty,
     ObservedLog,
+    events_of,
     false_alarm_table,
     joined,
     measured_torque,
     observe_runs,
-    run_detector,
 )
 from leadthrough.friction.model import FrictionModel
 from leadthrough.logs.log import MAX_GAP, JointLog
@@ -91,7 +91,7 @@ def inspect_log(
     Each gap-free run is observed on its own (:func:`observe_runs`): no contact spans a gap.
     """
     runs = observe_runs(log, robot, friction, uncertainty)
-    events = [event for run in runs for event in run_detector(run, parameters)]
+    events = events_of(runs, parameters)
     return Inspection(joined(runs), events, false_alarm_table(runs), robot.name,
                       supervisor_verdict(log, robot), int(log.t.size), log.gaps())  # fmt: skip
 

@@ -164,14 +164,17 @@ class JointLog:
 
     def gaps(self, max_gap: float = MAX_GAP) -> list[tuple[float, float]]:
         """(last time before, first time after) of each gap longer than ``max_gap`` [s]."""
-        after = np.flatnonzero(np.diff(self.t) > max_gap) + 1
-        return [(float(self.t[k - 1]), float(self.t[k])) for k in after]
+        return [(float(self.t[k - 1]), float(self.t[k])) for k in self._after_gaps(max_gap)]
 
     def runs(self, max_gap: float = MAX_GAP) -> list[JointLog]:
         """The log split at its gaps longer than ``max_gap`` [s]: each run gap-free."""
-        after = np.flatnonzero(np.diff(self.t) > max_gap) + 1
+        after = self._after_gaps(max_gap)
         bounds = zip([0, *after.tolist()], [*after.tolist(), self.n_samples], strict=True)
         return [self._rows(slice(start, stop)) for start, stop in bounds]
+
+    def _after_gaps(self, max_gap: float) -> NDArray[np.intp]:
+        """The first row after each gap longer than ``max_gap`` [s]."""
+        return np.flatnonzero(np.diff(self.t) > max_gap) + 1
 
     def _rows(self, rows: slice) -> JointLog:
         def cut(values: FloatArray | None) -> FloatArray | None:
