@@ -56,6 +56,10 @@ def workdir(tmp_path_factory) -> Path:
     (root / "cut.mcap").write_bytes(data[: len(data) // 2])
     (root / "garbage.csv").write_text("a,b,c\n1,2\n")
     (root / "yumi.csv").write_text(lt.robots.yumi().name)  # not a log either
+    for run in ("panda_run", "other_panda_run"):  # Panda text logs: a folder of four files
+        (root / run).mkdir()
+        for kind in ("time", "positions", "velocity", "torques"):
+            (root / run / f"exciting_traj_{kind}.txt").write_text("0\n")
     return root
 
 
@@ -234,7 +238,12 @@ def test_twin_options_on_a_real_arms_runs_are_refused(workdir, option, flag):
      (["--log", "taught.mcap", "taught.mcap"], "--log: taught.mcap is given twice"),
      (["--log", "taught.mcap", "./adir/../taught.mcap"], "--log: adir/../taught.mcap is given"),
      (["--log", "taught.mcap", "--held-out", "taught.mcap"],
-      "--held-out: taught.mcap is also a --log run")],
+      "--held-out: taught.mcap is also a --log run"),
+     (["--log", "panda_run", "panda_run/exciting_traj_time.txt"],
+      "--log: panda_run/exciting_traj_time.txt is given twice (each run counts once)"),
+     (["--log", "panda_run/exciting_traj_time.txt", "--held-out",
+       "./panda_run/exciting_traj_torques.txt"],
+      "--held-out: panda_run/exciting_traj_torques.txt is also a --log run")],
     ids=lambda value: value if isinstance(value, str) else " ".join(value),
 )  # fmt: skip
 def test_a_joint_or_run_given_twice_is_refused(workdir, argv, says):
@@ -242,6 +251,13 @@ def test_a_joint_or_run_given_twice_is_refused(workdir, argv, says):
     status, _, err = run(["identify", *argv], workdir)
     assert_one_line_error(status, err)
     assert says in err
+
+
+def test_two_panda_runs_are_not_one_run(workdir):
+    """Files of two Panda folders are two runs: past the checks, not refused as one run."""
+    with pytest.raises(AssertionError, match="heavy work"):
+        run(["identify", "--log", "panda_run/exciting_traj_time.txt",
+             "other_panda_run/exciting_traj_time.txt"], workdir)  # fmt: skip
 
 
 def test_a_folder_that_cannot_be_written_is_one_line(workdir):

@@ -260,6 +260,29 @@ def test_a_bad_log_is_named_by_its_file(yumi):
         identify_friction([short], lt.Dynamics(yumi))
 
 
+def test_a_run_given_twice_is_refused(yumi, tmp_path):
+    """The same log twice, or one file read twice however spelt: one error naming the run.
+
+    Both were fitted, the run weighing double. The parts of one log split at its gap are
+    two runs: not refused (the fit then finds that nothing moved).
+    """
+    n, t = yumi.n_joints, np.arange(60) * 0.004
+    log = lt.JointLog(t, np.zeros((60, n)), np.zeros((60, n)), np.zeros((60, n)))
+    with pytest.raises(lt.ParameterError) as error:
+        identify_friction([log, log], yumi)
+    assert str(error.value) == "logs: log 1 is given twice (each run counts once)"
+    path = save_logs([log], tmp_path / "run.csv")
+    (tmp_path / "sub").mkdir()
+    spelt_otherwise = tmp_path / "sub" / ".." / "run.csv"
+    with pytest.raises(lt.ParameterError) as error:
+        identify_friction([lt.read_log(path), lt.read_log(spelt_otherwise)], yumi)
+    assert str(error.value) == f"logs: {spelt_otherwise} is given twice (each run counts once)"
+    gapped = lt.JointLog(np.concatenate([t, t + 10.0]), np.zeros((120, n)), np.zeros((120, n)),
+                         np.zeros((120, n)), source=str(path))  # fmt: skip
+    with pytest.raises(IdentificationError, match="no joint moved"):
+        identify_friction(gapped.runs(), yumi)
+
+
 def test_an_excitation_file_is_named_in_the_errors_with_its_joint_count(short_logs, tmp_path):
     """Logs loaded from a file carry it: a NaN or another arm's joint count names it.
 

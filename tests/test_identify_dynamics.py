@@ -116,6 +116,28 @@ def test_log_without_torque_is_one_clear_error(nominal):
         lt.identify_dynamics(log, nominal)
 
 
+def test_a_run_given_twice_is_refused(nominal, tmp_path):
+    """A Panda text log read from its folder and from one of its files is one run: refused.
+
+    So is the same log object twice. Both were fitted, the run weighing double. The parts
+    of one log split at its gap are two runs: not refused (too short here to fit).
+    """
+    t = np.arange(40) * 0.001
+    for kind in ("time", "positions", "velocity", "torques"):
+        values = t if kind == "time" else np.zeros((40, 6))
+        (tmp_path / f"exciting_traj_{kind}.txt").write_text("\n".join(map(str, values.ravel())))
+    folder, one_file = lt.read_log(tmp_path), lt.read_log(tmp_path / "exciting_traj_velocity.txt")
+    for logs in ([folder, one_file], [folder, folder]):
+        with pytest.raises(lt.ParameterError) as error:
+            lt.identify_dynamics(logs, nominal)
+        assert str(error.value) == f"logs: {tmp_path} is given twice (each run counts once)"
+    short = t[:15]
+    gapped = lt.JointLog(np.concatenate([short, short + 10.0]), np.zeros((30, 6)),
+                         np.zeros((30, 6)), np.zeros((30, 6)), source=str(tmp_path))  # fmt: skip
+    with pytest.raises(DynamicsIdentificationError, match="15 samples, expected 6 and ≥ 20"):
+        lt.identify_dynamics(gapped.runs(), nominal)
+
+
 def test_a_current_log_is_torque_through_the_robots_constants(synthetic, nominal):
     """A log of motor currents (read without the robot) identifies as its K·i torque log."""
     log = synthetic[1]  # the held-out log, as torques

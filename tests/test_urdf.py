@@ -265,6 +265,87 @@ def test_a_continuous_joint_needs_its_torque_and_speed_limits(tmp_path):
     assert robot.joints[1].torque_limit == 10.0
 
 
+HINGES = SLIDER_URDF.format(second="revolute")
+SLIDE_LIMIT = '<limit lower="0" upper="0.3" effort="10" velocity="1"/>'
+SLIDE_AXIS = '<axis xyz="0 0 1"/>\n    ' + SLIDE_LIMIT
+LINK2_MASS = '<mass value="0.5"/>'
+LINK2_INERTIA = LINK2_MASS + '\n      <inertia ixx="0.01"'
+SLIDE, LINK2 = "joint 'slide'", "link 'link2'"
+
+#: (text of HINGES, its replacement, the field named, the reason given).
+MALFORMED_PARTS = [
+    pytest.param(SLIDE_LIMIT, SLIDE_LIMIT.replace('"10"', '"abc"'), SLIDE,
+                 '<limit effort="abc"> is not a number', id="effort-not-a-number"),
+    pytest.param(SLIDE_LIMIT, SLIDE_LIMIT.replace('effort="10" ', ""), SLIDE,
+                 "<limit> has no effort", id="effort-missing"),
+    pytest.param(SLIDE_LIMIT, SLIDE_LIMIT.replace(' velocity="1"', ""), SLIDE,
+                 "<limit> has no velocity", id="velocity-missing"),
+    pytest.param(SLIDE_LIMIT, SLIDE_LIMIT.replace('"0.3"', '"nan"'), SLIDE,
+                 '<limit upper="nan"> is not a number', id="upper-nan"),
+    pytest.param(SLIDE_LIMIT, SLIDE_LIMIT.replace('"0"', '"1e999"'), SLIDE,
+                 '<limit lower="1e999"> is not finite', id="lower-overflows"),
+    pytest.param(SLIDE_LIMIT, SLIDE_LIMIT.replace('"10"', '"-10"'), SLIDE,
+                 '<limit effort="-10"> must not be negative', id="effort-negative"),
+    pytest.param(SLIDE_LIMIT, "", SLIDE, "a revolute joint needs <limit effort velocity>: "
+                 "its torque and speed limits", id="limit-missing"),
+    pytest.param(SLIDE_AXIS, SLIDE_AXIS.replace('"0 0 1"', '"1 0"'), SLIDE,
+                 '<axis xyz="1 0">: expected 3 numbers, got 2', id="axis-two-values"),
+    pytest.param(SLIDE_AXIS, SLIDE_AXIS.replace('"0 0 1"', '"0 inf 1"'), SLIDE,
+                 """<axis xyz="0 inf 1">: 'inf' is not a number""", id="axis-inf"),
+    pytest.param('<origin xyz="0 0 0.2"/>', '<origin xyz="0 0 0.2" rpy="0 nan 0"/>', SLIDE,
+                 """<origin rpy="0 nan 0">: 'nan' is not a number""", id="origin-nan"),
+    pytest.param(SLIDE_LIMIT, SLIDE_LIMIT + '<dynamics friction="x"/>', SLIDE,
+                 '<dynamics friction="x"> is not a number', id="friction-not-a-number"),
+    pytest.param('<child link="link2"/>', '<child link="link9"/>', SLIDE,
+                 '<child link="link9"> names no link of the file', id="child-undefined"),
+    pytest.param('<parent link="link1"/>', "", SLIDE, "has no <parent link>",
+                 id="parent-missing"),
+    pytest.param('"slide" type="revolute"', '"slide" type="revolving"', SLIDE,
+                 "type 'revolving' is not a URDF joint type (revolute, continuous, prismatic, "
+                 "fixed, floating, planar)", id="type-unknown"),
+    pytest.param('name="slide"', 'name="hinge"', "joint 'hinge'", "defined twice",
+                 id="joint-defined-twice"),
+    pytest.param(LINK2_MASS, '<mass value="-0.5"/>', LINK2,
+                 '<mass value="-0.5"> must not be negative', id="mass-negative"),
+    pytest.param(LINK2_MASS, '<mass value="half"/>', LINK2, '<mass value="half"> is not a number',
+                 id="mass-not-a-number"),
+    pytest.param(LINK2_MASS, "", LINK2, "<inertial> has no <mass>", id="mass-missing"),
+    pytest.param(LINK2_INERTIA, LINK2_INERTIA.replace('"0.01"', '"nan"'), LINK2,
+                 '<inertia ixx="nan"> is not a number', id="inertia-nan"),
+    pytest.param('<origin xyz="0 0 0.1"/>\n      ' + LINK2_MASS,
+                 '<origin xyz="0 0"/>\n      ' + LINK2_MASS, LINK2,
+                 '<origin xyz="0 0">: expected 3 numbers, got 2', id="com-two-values"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("old", "new", "field", "reason"), MALFORMED_PARTS)
+def test_a_malformed_joint_or_link_is_named(tmp_path, old, new, field, reason):
+    """A malformed value of a joint or link: one line naming the file, it and what is wrong.
+
+    Before, the URDF parser's reason went to stderr and the error only said "not a valid
+    URDF"; a link whose mass was not a number lost its inertial and read as a mass of 0.
+    """
+    assert HINGES.count(old) == 1, old
+    path = tmp_path / "arm.urdf"
+    path.write_text(HINGES.replace(old, new), encoding="utf-8")
+    error = _error(path)
+    assert (error.field, error.reason) == (field, reason)
+    assert str(error) == f"{path}: {field}: {reason}"
+
+
+def test_a_malformed_limit_of_the_shipped_panda_names_its_joint(tmp_path):
+    """The shipped Panda with joint 3's effort not a number: its joint and value named."""
+    text = (Path(lt.robots.__file__).parent / "data" / "panda.urdf").read_text(encoding="utf-8")
+    limit = '<limit effort="87.0" lower="-2.8973" upper="2.8973" velocity="2.175"/>'
+    joint3 = text.index('<joint name="panda_joint3"')
+    assert text.index(limit, joint3) < text.index("</joint>", joint3)
+    path = tmp_path / "panda.urdf"
+    path.write_text(text[:joint3] + text[joint3:].replace('effort="87.0"', 'effort="abc"', 1),
+                    encoding="utf-8")  # fmt: skip
+    error = _error(path, tip="panda_hand")
+    assert str(error) == f"""{path}: joint 'panda_joint3': <limit effort="abc"> is not a number"""
+
+
 @pytest.mark.parametrize(
     ("keyword", "values"),
     [

@@ -40,20 +40,20 @@ def parse_joints(text: str | None, n: int) -> list[int] | None:
 
 
 def refuse_repeated_runs(logs: Sequence[Path], held_out: Sequence[Path] = ()) -> None:
-    """Refuse a run named twice in ``--log`` and ``--held-out`` (the same file, however spelt).
+    """Refuse a run named twice in ``--log`` and ``--held-out``.
+
+    Twice: the same file however spelt, or a Panda text log named by its folder and by
+    one of its files (:func:`~leadthrough.runtime.readers.run_path`).
 
     Raises:
         ParameterError: A ``--log`` run given twice (it would be fitted twice), or a
             ``--held-out`` one given twice or fitted too.
     """
-    seen: dict[Path, str] = {}
-    for option, path in [*(("--log", p) for p in logs), *(("--held-out", p) for p in held_out)]:
-        key = Path(path).resolve()
-        if key in seen:
-            where = "given twice" if seen[key] == option else f"also a {seen[key]} run"
-            raise ParameterError(option, f"{path} is {where} (each run is fitted or held out "
-                                         "once)")  # fmt: skip
-        seen[key] = option
+    from leadthrough.logs.runs import refuse_repeated
+    from leadthrough.runtime.readers import run_path
+
+    named = [*(("--log", path) for path in logs), *(("--held-out", path) for path in held_out)]
+    refuse_repeated((option, str(path), run_path(Path(path))) for option, path in named)
 
 
 def identify(

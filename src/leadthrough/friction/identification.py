@@ -52,6 +52,7 @@ from leadthrough.filters import low_pass_signal, pole
 from leadthrough.friction.along_travel import level_along_travel, level_error
 from leadthrough.friction.model import FrictionModel, level_stays_positive, sigmoid
 from leadthrough.logs.log import period_problem, rate_problem
+from leadthrough.logs.runs import log_name, refuse_repeated_logs
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 
@@ -184,6 +185,8 @@ def identify_friction(
     Raises:
         IdentificationError: A log is malformed, no joint moved, or a requested joint
             never moved.
+        ParameterError: A log is given twice: the same object, or one run read twice
+            (:func:`~leadthrough.logs.runs.refuse_repeated_logs`).
     """
     settings = settings or IdentificationSettings()
     if isinstance(dynamics, RobotDescription):
@@ -241,27 +244,23 @@ def _sliding_count(samples: FrictionSamples, j: int, settings: IdentificationSet
 def friction_samples(
     logs: Any, dynamics: Dynamics, settings: IdentificationSettings | None = None
 ) -> FrictionSamples:
-    """Filtered samples and friction torques of every log, stacked."""
+    """Filtered samples and friction torques of every log, stacked.
+
+    Raises:
+        IdentificationError: No log, or a log is malformed.
+        ParameterError: A log is given twice (:func:`~leadthrough.logs.runs.refuse_repeated_logs`).
+    """
     settings = settings or IdentificationSettings()
     logs = [logs] if _is_log(logs) else list(logs)
     if not logs:
         raise IdentificationError("no logs given")
+    refuse_repeated_logs(logs)
     parts = [_log_samples(i, log, dynamics, settings) for i, log in enumerate(logs)]
     return FrictionSamples(*(np.concatenate(arrays) for arrays in zip(*parts, strict=True)))
 
 
 def _is_log(value: Any) -> bool:
     return isinstance(value, Mapping) or hasattr(value, "tau")
-
-
-def log_name(log: Any, index: int) -> str:
-    """How an error names a log: its file, else "log <index>" (0-based).
-
-    The file is ``JointLog.source``, or a mapping's ``"source"`` (as
-    :func:`~leadthrough.friction.logs.load_logs` gives it).
-    """
-    source = log.get("source") if isinstance(log, Mapping) else getattr(log, "source", None)
-    return str(source) if source else f"log {index}"
 
 
 def log_field(log: Any, name: str, index: int = 0) -> FloatArray:

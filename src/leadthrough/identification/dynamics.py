@@ -33,6 +33,7 @@ from leadthrough.identification.regressor import (
     regressor_rows,
 )
 from leadthrough.identification.smoothing import smooth_derivative
+from leadthrough.logs.runs import log_name, refuse_repeated_logs
 from leadthrough.model.description import FloatArray, RobotDescription
 
 #: Alternations of the linear fit (weights from the last residual) and of the gains.
@@ -139,6 +140,8 @@ def identify_dynamics(
     Raises:
         DynamicsIdentificationError: A log has no torque, the wrong joint count, or
             fewer than 20 samples.
+        ParameterError: A log is given twice: the same object, or one run read twice
+            (:func:`~leadthrough.logs.runs.refuse_repeated_logs`).
     """
     settings = settings or DynamicsSettings()
     friction = friction or FrictionModel.from_robot(robot)
@@ -191,9 +194,10 @@ def _stacked_samples(
     logs = [logs] if hasattr(logs, "t") else list(logs)
     if not logs:
         raise DynamicsIdentificationError("no logs given")
+    refuse_repeated_logs(logs)
     n, parts = robot.n_joints, []
     for index, log in enumerate(logs):
-        where = getattr(log, "source", "") or f"log {index}"
+        where = log_name(log, index)
         if log.q.shape[1] != n or len(log.t) < 20:
             shape = f"{log.q.shape[1]} joints and {len(log.t)} samples"
             raise DynamicsIdentificationError(f"{where}: {shape}, expected {n} and ≥ 20")

@@ -88,9 +88,26 @@ def read_log(
     return log
 
 
+def run_path(path: Path) -> Path:
+    """The file or folder that holds the run ``path`` names, resolved (nothing is read).
+
+    A Panda text log's folder, whether ``path`` is the folder or one of its files; the
+    file itself otherwise. Two paths with one ``run_path`` name one run, as ``read_log``
+    reads it (whose ``source`` is the folder of a Panda text log: see
+    :func:`~leadthrough.logs.runs.run_identity`).
+    """
+    resolved = Path(path).resolve()
+    return resolved.parent if _panda_file(resolved) else resolved
+
+
+def _panda_file(path: Path) -> bool:
+    """Whether ``path`` is one file of a Panda text log (``exciting_traj_*.txt``)."""
+    return path.name.startswith("exciting_traj_") and path.suffix == ".txt" and not path.is_dir()
+
+
 def detect_format(path: Path) -> Format:
     """The format of ``path`` from its name and first line (see the module docstring)."""
-    if path.is_dir() or (path.name.startswith("exciting_traj_") and path.suffix == ".txt"):
+    if path.is_dir() or _panda_file(path):
         return "panda_txt"
     if path.suffix == ".mcap" or path.name.endswith(".mcap.part"):
         return "recording"

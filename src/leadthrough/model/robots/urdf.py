@@ -37,6 +37,7 @@ from leadthrough.model.description import (
     RobotDescription,
 )
 from leadthrough.model.robots.drive import complete_drive_data
+from leadthrough.model.robots.urdf_check import check_urdf
 from leadthrough.validation import within
 
 _REVOLUTE = {
@@ -108,11 +109,12 @@ def from_urdf(
     except (OSError, UnicodeDecodeError) as error:
         raise RobotDescriptionError(source, "", f"cannot read it ({error})") from None
     try:
-        text, continuous = _bounded_continuous_joints(text, source)
+        check_urdf(_xml(text), source)
+        text, continuous = _bounded_continuous_joints(text)
         text = _without_tools_beyond(text, tip)
         full = pin.buildModelFromXML(text)
     except RobotDescriptionError:
-        raise  # a continuous joint without its limits, named
+        raise  # a malformed joint or link, named
     except (ValueError, RuntimeError) as error:
         raise RobotDescriptionError(source, "", f"not a valid URDF ({error})") from None
     with within("", source=source):
@@ -132,32 +134,29 @@ def from_urdf(
     return complete_drive_data(robot, missing, drive_data, assumed)
 
 
-def _bounded_continuous_joints(text: str, source: str) -> tuple[str, set[str]]:
-    """URDF ``text`` with each continuous joint made revolute within ±:data:`CONTINUOUS_LIMIT`.
-
-    Its ``<limit>`` keeps its effort and velocity (a URDF's continuous joint ignores
-    ``lower`` and ``upper``). Returns the text and the names of the joints changed;
-    unchanged text when there are none.
-
-    Raises:
-        ValueError: ``text`` is not XML.
-        RobotDescriptionError: A continuous joint has no ``<limit effort velocity>``
-            (its torque and speed limits), naming ``source`` and the joint.
-    """
+def _xml(text: str) -> ElementTree.Element:
+    """The root element of ``text``; a ValueError if ``text`` is not XML."""
     try:
-        root = ElementTree.fromstring(text)
+        return ElementTree.fromstring(text)
     except ElementTree.ParseError as error:
         raise ValueError(str(error)) from None
-    continuous = [joint for joint in root.iter("joint") if joint.get("type") == "continuous"]
+
+
+def _bounded_continuous_joints(text: str) -> tuple[str, set[str]]:
+    """URDF ``text`` with each continuous joint made revolute within ±:data:`CONTINUOUS_LIMIT`.
+
+    Its ``<limit>`` (which :func:`check_urdf` requires) keeps its effort and velocity (a
+    URDF's continuous joint ignores ``lower`` and ``upper``). Returns the text and the
+    names of the joints changed; unchanged text when there are none.
+    """
+    root = _xml(text)
+    continuous = [joint for joint in root.findall("joint") if joint.get("type") == "continuous"]
     if not continuous:
         return text, set()
     for joint in continuous:
         joint.set("type", "revolute")
         limit = joint.find("limit")
-        if limit is None or limit.get("effort") is None or limit.get("velocity") is None:
-            raise RobotDescriptionError(source, f"joint {joint.get('name')!r}",
-                                        "a continuous joint needs <limit effort velocity>: "
-                                        "its torque and speed limits")  # fmt: skip
+        assert limit is not None, "check_urdf requires a continuous joint's <limit>"
         limit.set("lower", f"{-CONTINUOUS_LIMIT!r}")
         limit.set("upper", f"{CONTINUOUS_LIMIT!r}")
     names = {str(joint.get("name")) for joint in continuous}
