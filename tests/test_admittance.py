@@ -1,9 +1,15 @@
-"""The admittance core (thesis §6.2): virtual system, dead-zone, bounds, operator weight."""
+"""The admittance core (thesis §6.2): virtual system, dead-zone, bounds, operator weight.
+
+And the rules of the active law around it (:class:`~leadthrough.control.active_law.ActiveLaw`:
+the learned bias, the speed cap, the end-stop reaction, the limit zone, the push's average),
+each on a few periods of the law alone, compiled and NumPy.
+"""
 
 import numpy as np
 import pytest
 
 import leadthrough as lt
+from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.admittance import (
     AdmittanceState,
     admittance_step,
@@ -269,3 +275,164 @@ def test_a_lagging_joints_reference_relaxes_to_it_at_the_unwinding_rate():
     history = np.array(history)
     assert np.all(np.sign(history[:, :2]) == np.sign(qd_ref[:2]))
     assert np.all(np.abs(history[:, 1]) >= 0.1)
+
+
+# --- the active law's rules, a few periods of the law alone ---------------------------------
+
+YUMI = lt.robots.yumi()
+HOME = YUMI.home()
+YUMI_MASS = lt.Dynamics(YUMI).mass(HOME)
+N = YUMI.n_joints
+
+
+def _active_law(compiled, **changes):
+    """The YuMi's active law on the nominal friction model, compiled or the NumPy reference."""
+    law = ActiveLaw(YUMI, lt.LeadThroughParameters(**changes), DT,
+                    lt.FrictionModel.from_robot(YUMI))  # fmt: skip
+    law.compiled = compiled
+    return law
+
+
+def _in_the_limit_zone():
+    """Home, with joint 7 half a limit zone (0.1 rad) from its upper limit [rad]."""
+    q = HOME.copy()
+    q[6] = YUMI.q_max[6] - 0.1
+    return q
+
+
+def _track(law, q, qd, push, periods=1):
+    """``periods`` of the admittance driven by ``push`` [Nm] (drive and residual alike)."""
+    zeros = np.zeros(N)
+    for _ in range(periods):
+        law.drive[:], law.residual[:], law.uncertainty[:] = push, push, 0.1
+        law.tracking(q, qd, zeros, YUMI_MASS)
+    return law.references
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_the_admittance_never_asks_a_joint_for_more_than_its_share_of_the_speed_limit(compiled):
+    """What the speed cap prevents: a hard push asking any speed of the references.
+
+    A 50 Nm push on every joint, each joint following its reference, asks within 0.1 s for
+    far more than ``assist_speed_fraction`` (0.3) of the joint's speed limit; the
+    references stop at it.
+    """
+    law = _active_law(compiled)
+    law.references = AdmittanceState(HOME.copy(), np.zeros(N))
+    for _ in range(25):
+        references = law.references
+        _track(law, references.q_ref.copy(), references.qd_ref.copy(), 50.0)
+    cap = 0.3 * YUMI.velocity_limits
+    np.testing.assert_allclose(law.references.qd_ref, cap, rtol=1e-12)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_near_a_limit_a_torque_away_from_it_is_the_end_stops_reaction(compiled):
+    """What the end-stop reaction prevents: an arm thrown out of its stop by the stop's push.
+
+    Joint 7 inside its limit zone reads 2 Nm away from the limit (an end-stop pushes back
+    on a joint pressed into it, thesis §6.3.2): the references stay where the joint is;
+    the same torque clear of the limits moves them.
+    """
+    q, torque, zeros = _in_the_limit_zone(), np.zeros(N), np.zeros(N)
+    torque[6] = -2.0
+    law = _active_law(compiled)
+    law.references = AdmittanceState(q.copy(), zeros.copy())
+    references = _track(law, q, zeros, torque, periods=5)
+    assert references.qd_ref[6] == 0.0 and references.q_ref[6] == q[6]
+    assert law.feedback[6] == 0.0
+    clear = _active_law(compiled)
+    clear.references = AdmittanceState(HOME.copy(), zeros.copy())
+    assert _track(clear, HOME, zeros, torque, periods=5).qd_ref[6] < -0.1  # free: it moves
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_a_joint_inside_the_limit_zone_is_held_where_it_is_not_pulled_out(compiled):
+    """What the bounds widened to the joint prevent: the PD pulling a joint out of the zone.
+
+    Joint 7 rests 0.1 rad inside its limit zone (put there by the hand or the supervisor's
+    wall), nothing pushes: its reference stays at the joint and the PD sends nothing.
+    Clamped to the zone's edge instead, the reference would be 0.1 rad off and the PD
+    would pull the joint out (keeping it out of the zone is the supervisor's soft wall).
+    """
+    q, zeros = _in_the_limit_zone(), np.zeros(N)
+    law = _active_law(compiled)
+    law.references = AdmittanceState(q.copy(), zeros.copy())
+    references = _track(law, q, zeros, zeros)
+    assert references.q_ref[6] == q[6] and law.feedback[6] == 0.0
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_a_stiff_hands_oscillation_does_not_modulate_the_damping(compiled):
+    """What the push's average over ``push_time`` prevents: damping that swings with a hand.
+
+    Every joint moves at 0.2 rad/s under a push of 0.8 Nm along the motion with a 5 Hz
+    oscillation of ±1 Nm on top (a stiff hand: the push turns against the motion every
+    other 0.1 s). Averaged over ``push_time`` the push sustains the motion throughout,
+    so the damping weight stays near 1; taken sample by sample (``push_time`` → 0) it
+    falls to 0 on every half-wave against the motion, and the damping rises 21-fold there.
+    """
+    weights = {}
+    for push_time in (0.1, 1e-6):
+        law, lows = _active_law(compiled, push_time=push_time), []
+        for k in range(250):  # 1 s: five periods of the oscillation
+            law.references = AdmittanceState(HOME.copy(), np.full(N, 0.2))
+            _track(law, HOME, np.full(N, 0.2), 0.8 + (1.0 if (k // 25) % 2 == 0 else -1.0))
+            lows.append(np.min(law.damping_weight))
+        weights[push_time] = min(lows[100:])  # after the first 0.4 s
+    assert weights[0.1] > 0.95 and weights[1e-6] < 0.01
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_the_learned_bias_never_exceeds_twice_the_plausible_model_error(compiled):
+    """What the bias' bound prevents: a push held still learned as model error.
+
+    A steady 10 Nm on every joint, learned at the full rate (as if nobody guided: the
+    weights zeroed every period) for 8 learning times: the bias stops at twice the model
+    error plausible there (the friction tolerance, gravity zero here), and the rest of the
+    push still reads as one. Unbounded, the bias would take the whole push.
+    """
+    law, zeros = _active_law(compiled), np.zeros(N)
+    estimate = np.full(N, 10.0)
+    for _ in range(2000):
+        law.weight[:] = 0.0
+        law.operator_torque(estimate, HOME, zeros, zeros)
+    bound = 2.0 * law._friction_tolerance
+    np.testing.assert_allclose(law.model_error.bias, bound, rtol=1e-12)
+    np.testing.assert_allclose(law.residual, estimate - bound, rtol=1e-12)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_the_bias_learns_nothing_of_a_push_the_law_passes(compiled):
+    """What learning only as fast as nobody guides prevents: the assist fading under a push.
+
+    A steady push of twice the resting Coulomb band on every joint passes (weight 0.92);
+    over 1 s the bias takes 1 % of it. Learned at the full rate it would take a third or
+    more (up to its bound) within the second, and the assist with it.
+    """
+    law, zeros = _active_law(compiled), np.zeros(N)
+    estimate = 2.0 * law.friction.coulomb_uncertainty(zeros, HOME)
+    for _ in range(250):
+        law.operator_torque(estimate, HOME, zeros, zeros)
+    assert np.all(law.weight > 0.9)
+    assert np.all(np.abs(law.model_error.bias) < 0.02 * estimate)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_the_bias_learns_nothing_while_a_joint_is_in_its_limit_zone(compiled):
+    """What pausing the learning near a limit prevents: a stop's reaction learned as model error.
+
+    A small steady reading (0.3 of the friction tolerance, weight ≈ 0.05) is learned
+    clear of the limits (60 % within 1 s); with joint 7 in its limit zone, where a joint
+    may rest against its stop, none of it is.
+    """
+    zeros = np.zeros(N)
+    learned = {}
+    for name, q in (("clear", HOME), ("in the zone", _in_the_limit_zone())):
+        law = _active_law(compiled)
+        estimate = 0.3 * law._friction_tolerance
+        for _ in range(250):
+            law.operator_torque(estimate, q, zeros, zeros)
+        learned[name] = law.model_error.bias / estimate
+    assert np.all(learned["clear"] > 0.5)
+    assert np.all(learned["in the zone"] == 0.0)
