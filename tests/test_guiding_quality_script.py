@@ -29,7 +29,7 @@ def test_cases_guided_without_a_calibration_are_counted_and_named():
 
 def test_cases_over_a_per_case_goal_are_counted_and_named_worst_first():
     """Every case above a goal that each case must keep is named, worst first, per figure."""
-    keep = {"vibration": 1.0, "speed": 0.9, "stop": 0.2, "drift": 0.3,
+    keep = {"vibration": 1.0, "speed": 0.9, "speed_passive": 0.8, "stop": 0.2, "drift": 0.3,
             "stop_passive": 0.2, "drift_passive": 0.3}  # fmt: skip
     results = {"a": keep | {"vibration": 1.6}, "b": keep | {"vibration": 2.1, "drift": 1.0},
                "c": keep | {"speed": 1.0}}  # fmt: skip
@@ -37,6 +37,16 @@ def test_cases_over_a_per_case_goal_are_counted_and_named_worst_first():
     # 1.0 of the speed bound keeps its goal (≤ 1), 1.0 mrad of drift does not (< 1)
     assert line == "over a per-case goal: vibration 2 of 3 (b 2.1, a 1.6); drift 1 of 3 (b 1)"
     assert guiding_quality.over_goal_line({"a": keep}) == "over a per-case goal: none"
+
+
+def test_a_speed_over_its_bound_is_set_beside_passive_modes_on_the_same_cases():
+    """The same hand and plant may throw the arm past its bound in passive mode too."""
+    keep = {"vibration": 1.0, "speed": 0.9, "speed_passive": 0.8, "stop": 0.2, "drift": 0.3,
+            "stop_passive": 0.2, "drift_passive": 0.3}  # fmt: skip
+    results = {"a": keep | {"speed": 1.2, "speed_passive": 1.3},
+               "b": keep | {"speed_passive": 1.1}, "c": keep}  # fmt: skip
+    line = guiding_quality.over_goal_line(results)
+    assert line == "over a per-case goal: speed 1 of 3 (a 1.2; passive mode 2 of 3)"
 
 
 def test_other_hands_make_the_cases_and_an_unknown_one_is_a_one_line_error(capsys):
