@@ -24,8 +24,13 @@ def log_name(log: Any, index: int) -> str:
     The file is ``JointLog.source``, or a mapping's ``"source"`` (as
     :func:`~leadthrough.friction.logs.load_logs` gives it).
     """
-    source = log.get("source") if isinstance(log, Mapping) else getattr(log, "source", None)
+    source = _attribute(log, "source")
     return str(source) if source else f"log {index}"
+
+
+def _attribute(log: Any, name: str) -> Any:
+    """A log's ``name``: a mapping's item or an object's attribute (None: it has none)."""
+    return log.get(name) if isinstance(log, Mapping) else getattr(log, name, None)
 
 
 def run_identity(source: str, t: Any) -> tuple[str, float] | None:
@@ -85,9 +90,7 @@ def refuse_repeated_logs(logs: Sequence[Any]) -> None:
     """
 
     def identity(log: Any) -> Hashable:
-        mapping = isinstance(log, Mapping)
-        source = log.get("source") if mapping else getattr(log, "source", None)
-        t = log.get("t") if mapping else getattr(log, "t", None)
-        return run_identity(str(source or ""), t) or ("object", id(log))
+        source = _attribute(log, "source")
+        return run_identity(str(source or ""), _attribute(log, "t")) or ("object", id(log))
 
     refuse_repeated(("logs", log_name(log, i), identity(log)) for i, log in enumerate(logs))

@@ -109,8 +109,9 @@ def from_urdf(
     except (OSError, UnicodeDecodeError) as error:
         raise RobotDescriptionError(source, "", f"cannot read it ({error})") from None
     try:
-        check_urdf(_xml(text), source)
-        text, continuous = _bounded_continuous_joints(text)
+        root = _xml(text)
+        check_urdf(root, source)
+        text, continuous = _bounded_continuous_joints(text, root)
         text = _without_tools_beyond(text, tip)
         full = pin.buildModelFromXML(text)
     except RobotDescriptionError:
@@ -142,14 +143,14 @@ def _xml(text: str) -> ElementTree.Element:
         raise ValueError(str(error)) from None
 
 
-def _bounded_continuous_joints(text: str) -> tuple[str, set[str]]:
+def _bounded_continuous_joints(text: str, root: ElementTree.Element) -> tuple[str, set[str]]:
     """URDF ``text`` with each continuous joint made revolute within ±:data:`CONTINUOUS_LIMIT`.
 
-    Its ``<limit>`` (which :func:`check_urdf` requires) keeps its effort and velocity (a
-    URDF's continuous joint ignores ``lower`` and ``upper``). Returns the text and the
-    names of the joints changed; unchanged text when there are none.
+    ``root`` is ``text`` parsed (changed in place where a joint is). Its ``<limit>``
+    (which :func:`check_urdf` requires) keeps its effort and velocity (a URDF's
+    continuous joint ignores ``lower`` and ``upper``). Returns the text and the names of
+    the joints changed; unchanged text when there are none.
     """
-    root = _xml(text)
     continuous = [joint for joint in root.findall("joint") if joint.get("type") == "continuous"]
     if not continuous:
         return text, set()
