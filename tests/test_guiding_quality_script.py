@@ -56,11 +56,13 @@ def test_other_hands_make_the_cases_and_an_unknown_one_is_a_one_line_error(capsy
     other = cases("full", (1,), ("soft", "firm"))
     assert len(other) == 14 and {c.hand for c in other} == {"soft", "firm"}
     assert [c.hand for c in other if c.path == "circle"] == ["soft", "soft"]
-    assert HANDS["soft"][0] == 100.0 and HANDS["firm"][0] == 1000.0
+    assert HANDS["soft"].stiffness == 100.0 and HANDS["firm"].stiffness == 1000.0
     with pytest.raises(SystemExit):
         guiding_quality.main(["--hands", "soft,gentle"])
     error = capsys.readouterr().err.strip().splitlines()[-1]
-    assert error.endswith("unknown hand(s) gentle: choose from relaxed, stiff, soft, firm")
+    assert error.endswith(
+        "unknown hand(s) gentle: choose from relaxed, stiff, soft, firm, grasping, stiff-grasping"
+    )
 
 
 def test_a_wider_plant_family_reaches_every_case_and_a_bad_setting_is_a_one_line_error(capsys):

@@ -49,11 +49,22 @@ from leadthrough.twin.simulator import DigitalTwin, TwinConfig
 
 BoolArray = NDArray[np.bool_]
 
-#: Hand impedances: (stiffness [N/m], damping [N s/m]). The benchmark's two span the
-#: issue's relaxed and stiff hands; "soft" and "firm" fill the 100–3000 N/m a person
-#: spans, with the same damping ratio (damping ≈ 1.8 √stiffness).
-HANDS = {"relaxed": (300.0, 30.0), "stiff": (3000.0, 100.0), "soft": (100.0, 18.0),
-         "firm": (1000.0, 57.0)}  # fmt: skip
+#: Hand impedances. The benchmark's two span the issue's relaxed and stiff hands; "soft"
+#: and "firm" fill the 100–3000 N/m a person spans, with the same damping ratio (damping
+#: ≈ 1.8 √stiffness). These four hold a point: they leave the tool's orientation free. The
+#: two grasping hands also hold the orientation the tool had at the grab, as a hand that
+#: grips a handle does: a forearm and wrist about 2 Nm/rad relaxed (Formica et al. 2012,
+#: the passive wrist 1–2 Nm/rad) and 10 Nm/rad with the grip and the arm stiffened.
+HANDS = {
+    "relaxed": HandParameters(300.0, 30.0),
+    "stiff": HandParameters(3000.0, 100.0),
+    "soft": HandParameters(100.0, 18.0),
+    "firm": HandParameters(1000.0, 57.0),
+    "grasping": HandParameters(300.0, 30.0, rotational_stiffness=2.0, rotational_damping=0.05),
+    "stiff-grasping": HandParameters(
+        3000.0, 100.0, rotational_stiffness=10.0, rotational_damping=0.2
+    ),
+}
 #: The hands of the benchmark's cases (the circle takes the first).
 BENCHMARK_HANDS = ("relaxed", "stiff")
 #: Line displacements from the home flange position [m, world].
@@ -323,7 +334,6 @@ def _run(
     controller's period (``dt``, 4 ms when it has none); its delay is in periods.
     """
     plant = sample_plant(robot, case.seed, case.physics, case.ranges)
-    stiffness, damping = HANDS[case.hand]
     if isinstance(factory, IdentifiedFirst):
         recorder = _Recorder(factory.controller(robot, mode, plant.config))
     else:
@@ -338,7 +348,7 @@ def _run(
         observe_truth(twin)
     before = simulate(twin, recorder, grab, progress=False)
     path = case_path(robot, case.path, twin.truth.flange_pose[:3, 3].copy())
-    hand = Hand(path, stiffness=stiffness, damping=damping)
+    hand = Hand.from_parameters(path, HANDS[case.hand])
     grabbed = twin.time
     twin.operator = During(hand, grabbed, grabbed + release)
     sim = simulate(twin, recorder, duration, progress=False).after(grabbed)
