@@ -11,10 +11,12 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import NDArray
 
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.experiments.friction_study import run_friction_study
@@ -25,6 +27,7 @@ from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.runtime.recording import SessionRecorder, read_recording
 from leadthrough.twin.operator import Hand
+from leadthrough.twin.paths import Path as HandPath
 from leadthrough.twin.presets import REALISTIC_TWIN
 from leadthrough.twin.runner import SimulationResult, simulate
 from leadthrough.twin.session_operator import Action, ScriptedOperator, TeachingSession
@@ -146,6 +149,27 @@ def intended_velocity(run: SimulationResult, actions: list[Action]) -> FloatArra
     turns a joint, not a hand on the tool, has no path: zero).
     """
     intended = np.zeros_like(run.flange_position)
+    for during, path, start in _hand_paths(run, actions):
+        intended[during] = path.velocity(run.t[during] - start)
+    return intended
+
+
+def intended_position(run: SimulationResult, actions: list[Action]) -> FloatArray:
+    """Where the hands pulled the flange [m, world], (N, 3); NaN between actions.
+
+    The paths of :func:`intended_velocity`: what the operator meant, against which the
+    taught path (``run.flange_position``) shows how the arm followed.
+    """
+    intended = np.full_like(run.flange_position, np.nan)
+    for during, path, start in _hand_paths(run, actions):
+        intended[during] = path.position(run.t[during] - start)
+    return intended
+
+
+def _hand_paths(
+    run: SimulationResult, actions: list[Action]
+) -> Iterator[tuple[NDArray[np.intp], HandPath, float]]:
+    """Each action's samples, its hand's path and start [s]: hands on the tool only."""
     for action in actions:
         during = np.flatnonzero((run.t >= action.start) & (run.t < action.stop))
         if during.size == 0:
@@ -153,8 +177,7 @@ def intended_velocity(run: SimulationResult, actions: list[Action]) -> FloatArra
         first = during[0]
         operator = action.make(run.flange_position[first], run.q_true[first])
         if isinstance(operator, Hand):  # a hand on the tool (not one turning a joint)
-            intended[during] = operator.path.velocity(run.t[during] - action.start)
-    return intended
+            yield during, operator.path, action.start
 
 
 @dataclass(frozen=True)

@@ -10,12 +10,15 @@ from leadthrough.experiments.demo import (
     DemoResult,
     figures_by_action,
     hand_force_rms,
+    intended_position,
     path_smoothness,
     teaching_actions,
 )
 from leadthrough.model.description import RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.plots import pyplot
+from leadthrough.twin.operator import Hand, HandParameters
+from leadthrough.twin.session_operator import TeachingSession
 
 
 def write_report(result: DemoResult, robot: RobotDescription, out: Path) -> Path:
@@ -39,9 +42,12 @@ def _tool_paths(result: DemoResult, robot: RobotDescription):
     plt = pyplot()
     taught = result.taught.flange_position
     replayed = result.replayed.flange_position
+    meant = intended_position(result.taught, teaching_actions(robot))
     figure, axes = plt.subplots(1, 2, figsize=(11, 4.8), constrained_layout=True)
     for axis, (i, j, label) in zip(axes, ((0, 1, "top view (x, y)"), (1, 2, "side view (y, z)")),
                                    strict=True):  # fmt: skip
+        axis.plot(meant[:, i], meant[:, j], color="0.55", lw=1.0, ls=":",
+                  label="where the hands pulled (each from where the tool was)")  # fmt: skip
         axis.plot(taught[:, i], taught[:, j], lw=2.5, label="taught (operator guiding)")
         axis.plot(replayed[:, i], replayed[:, j], "--", label="replayed")
         axis.set_title(label)
@@ -117,10 +123,21 @@ def _picture(result: DemoResult, robot: RobotDescription, path: Path) -> str:
     return f"![the arm mid-teaching]({path.name})"
 
 
+def _first_hand(result: DemoResult, robot: RobotDescription) -> HandParameters:
+    """The impedance of the session's first hand on the tool."""
+    sim = result.taught
+    for action in teaching_actions(robot):
+        operator = action.make(sim.flange_position[0], sim.q_true[0])
+        if isinstance(operator, Hand):
+            return operator.parameters
+    raise ValueError("the teaching session has no hand on the tool")
+
+
 def _markdown(result: DemoResult, picture: str, robot: RobotDescription) -> str:
     name = robot.name
     errors, sim = result.replay_error, result.taught
     smooth = path_smoothness(sim, teaching_actions(robot))
+    hand = _first_hand(result, robot)
     passive = path_smoothness(result.passive, teaching_actions(robot))
     force, passive_force = hand_force_rms(sim), hand_force_rms(result.passive)
     events = [e for e in result.events if e[1] not in ("mode",)]
@@ -141,6 +158,11 @@ Joint RMS error **{1000 * errors["joint_rms"]:.2f} mrad**
 tool path RMS error **{1000 * errors["tool_rms"]:.2f} mm**.
 
 ![tool paths](tool_paths.png)
+
+Dotted: the path each hand pulled the tool along, from where the tool was when it took it.
+A hand is a spring of {hand.stiffness:.0f} N/m with a damper: where the taught path is off
+its path, it pulls harder, {hand.stiffness / 100:.0f} N per cm. The press aims
+{100 * TeachingSession.press_depth:.0f} cm past the table's top, which stops the tool.
 
 ## What the operator did, and what the robot estimated
 ![operator torque](operator_torque.png)
