@@ -188,6 +188,21 @@ def test_stale_sensor_data_is_a_fault(yumi):
     assert "stale" in controller.supervisor.fault_reason
 
 
+def test_an_arm_resting_on_a_noise_free_plant_never_faults(yumi):
+    """Readings exact and repeated, the torque the command sent a period before: no fault.
+
+    Passive mode's dither parks after 2 s of rest and its command stops changing; the
+    sample then repeats bit for bit, which faulted "stale" at 2.1 s (a simulator without
+    noise, or a driver that reports the torque it was sent).
+    """
+    for mode in ("passive", "active"):
+        controller, measured = LeadThrough(yumi, mode), None
+        for k in range(1500):  # 6 s
+            state = lt.JointState(k * 0.004, yumi.home(), np.zeros(7), measured)
+            measured = controller.step(state).copy()
+        assert controller.state is SupervisorState.TEACHING, controller.supervisor.fault_reason
+
+
 def test_normal_guiding_never_faults(yumi, friction):
     """A guided path in both modes leaves the supervisor teaching (no hidden exception)."""
     for mode in ("passive", "active"):

@@ -9,7 +9,7 @@ import pytest
 
 import leadthrough as lt
 from leadthrough.errors import ParameterError
-from leadthrough.safety.checks import FrozenEncoders
+from leadthrough.safety.checks import MEASUREMENT_LAG, FrozenEncoders
 from leadthrough.safety.supervisor import SafetyParameters, SafetySupervisor, SupervisorState
 from realdata import REALDATA, needs_realdata
 
@@ -166,6 +166,85 @@ def test_a_whole_sample_counts_only_with_torques_each_time(dyn):
     assert [sup.check(t, MID, still, tau) for t in (0.1, 0.2, 0.3)] == [True, True, False]
     sup.reset()  # the whole-sample count restarts too
     assert [sup.check(t, MID, still, tau) for t in (0.4, 0.5, 0.6)] == [True, True, False]
+
+
+def _live_then_frozen(sup: SafetySupervisor, periods: int) -> tuple[np.ndarray, int]:
+    """Live torque readings for ``periods``, each the command sent the period before.
+
+    Returns the last reading (to be repeated from now on) and the next period's number.
+    """
+    tau, zeros = np.zeros(N), np.zeros(N)
+    for k in range(periods):
+        assert sup.check(k * DT, MID, zeros, tau)
+        tau = sup.command(k * DT, MID, zeros, np.full(N, 0.01 * k))
+    return tau, periods
+
+
+def test_a_noise_free_torque_at_rest_repeats_with_its_command_and_is_not_stale(dyn):
+    """A reading that holds the command sent, both steady: the sample repeats bit for bit.
+
+    What it prevents: a passive arm at rest whose torque reading has no noise (a
+    simulator's, a driver that reports the torque it was sent) faulted "sensor data
+    stale" 2.1 s into its rest, once its dither parked and its command stopped changing.
+    """
+    sup = SafetySupervisor(dyn, DT, SafetyParameters(stale_periods=10))
+    tau, zeros = np.zeros(N), np.zeros(N)
+    for k in range(500):
+        assert sup.check(k * DT, MID, zeros, tau), sup.fault_reason
+        tau = sup.command(k * DT, MID, zeros, np.full(N, 0.5))
+
+
+def test_a_repeated_sample_while_the_commands_change_is_stale_after_stale_periods(dyn):
+    """Live readings, then the same one repeated while every command differs: stale."""
+    sup = SafetySupervisor(dyn, DT, SafetyParameters(stale_periods=12))
+    frozen, start = _live_then_frozen(sup, 20)
+    results = []
+    for k in range(start, start + 12):
+        results.append(sup.check(k * DT, MID, np.zeros(N), frozen))
+        sup.command(k * DT, MID, np.zeros(N), np.full(N, 0.1 * (k % 2)))
+    assert results == [True] * 11 + [False]
+    assert sup.fault_reason.startswith("sensor data stale")
+
+
+def test_a_changed_command_that_the_repeated_reading_never_shows_is_stale(dyn):
+    """Steady for 100 periods, then one new command: stale once it is MEASUREMENT_LAG old.
+
+    A reading may hold a command up to :data:`MEASUREMENT_LAG` periods late; one that
+    has not followed it after that is not a live reading.
+    """
+    sup = SafetySupervisor(dyn, DT, SafetyParameters(stale_periods=10))
+    frozen, start = _live_then_frozen(sup, 20)
+    steady = np.full(N, 0.19)
+    for k in range(start, start + 100):
+        assert sup.check(k * DT, MID, np.zeros(N), frozen)
+        sup.command(k * DT, MID, np.zeros(N), steady)
+    results = []
+    for k in range(start + 100, start + 102 + MEASUREMENT_LAG):  # the new command from here
+        results.append(sup.check(k * DT, MID, np.zeros(N), frozen))
+        sup.command(k * DT, MID, np.zeros(N), steady + 0.05)
+    assert results == [True] * (MEASUREMENT_LAG + 1) + [False]
+
+
+def test_a_reading_that_follows_a_changed_command_within_the_lag_is_live(dyn):
+    """The same, but the reading follows the new command two periods late: no fault."""
+    sup = SafetySupervisor(dyn, DT, SafetyParameters(stale_periods=10))
+    frozen, start = _live_then_frozen(sup, 20)
+    for k in range(start, start + 100):
+        assert sup.check(k * DT, MID, np.zeros(N), frozen)
+        sup.command(k * DT, MID, np.zeros(N), np.full(N, 0.19))
+    new = np.full(N, 0.3)
+    sent = []  # the commands sent from now on, each read back two periods late
+    for k in range(start + 100, start + 200):
+        reading = frozen if len(sent) < 2 else sent[-2]
+        assert sup.check(k * DT, MID, np.zeros(N), reading), sup.fault_reason
+        sent.append(sup.command(k * DT, MID, np.zeros(N), new))
+
+
+def test_the_measurement_lag_is_the_longest_delay_the_controller_looks_for():
+    """The safety layer states the bound itself (it imports nothing from control)."""
+    from leadthrough.control.interface_delay import LONGEST
+
+    assert MEASUREMENT_LAG == LONGEST
 
 
 @pytest.mark.parametrize("compiled", [True, False])

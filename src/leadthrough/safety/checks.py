@@ -145,6 +145,9 @@ def command_problem(tau: FloatArray, n: int) -> str | None:
 
 #: :meth:`FrozenEncoders.count` of a sample with a reading out of range (or of another shape).
 OUT_OF_RANGE = -2
+#: The most periods a torque measurement may lag the command it holds
+#: (``control.interface_delay.LONGEST``, the longest delay the controller looks for).
+MEASUREMENT_LAG = 8
 _NO_BOUNDS = np.zeros(0)
 
 
@@ -163,11 +166,19 @@ class FrozenEncoders:
       torque (current) readings are noisy, and no sample of those logs repeats its
       predecessor even once.
 
+    A torque reading without noise (a simulator's, or a driver that reports the torque it
+    was sent) repeats too, wherever the arm rests and the command stops changing (a
+    passive arm's dither parked). So once the controller reports the commands it sends
+    (:meth:`sent`), a whole sample repeated is stale only if a command changed during the
+    repeat early enough (:data:`MEASUREMENT_LAG`) to show in the torque measured since:
+    live readings would have followed it. Fed samples alone, every repeat counts.
+
     What it cannot see, as a reading of an arm at rest: an encoder that stops while its
     joint rests, or a driver that repeats q and reports q̇ = 0, while the torques stay
-    live; and, without a torque measurement, a stale sample of an arm whose joints all
-    move slower than ``speed``. The controller then compensates gravity at the stale pose,
-    and the walls and the speed braking do not see the arm pushed away from it.
+    live; without a torque measurement, a stale sample of an arm whose joints all move
+    slower than ``speed``; and a stale sample while every command sent is the same. The
+    controller then compensates gravity at the stale pose, and the walls and the speed
+    braking do not see the arm pushed away from it.
 
     Args:
         n: Number of joints.
@@ -182,9 +193,33 @@ class FrozenEncoders:
         self.clear()
 
     def clear(self) -> None:
-        """Forget the samples seen so far (the counters restart)."""
+        """Forget the samples and commands seen so far (the counters restart)."""
         self._previous_bits: NDArray[np.uint64] | None = None
         self._runs = np.zeros(self.n + 1, dtype=np.int64)  # per joint, then the whole sample
+        self._last_command: bytes | None = None
+        self._changes = 0  # bit b: the command b + 1 periods back differed from its predecessor
+        self._commands = 0  # commands reported since the counters restarted
+
+    def sent(self, command: FloatArray) -> None:
+        """The command sent this period [Nm], shape (n,): whether it changed is recorded."""
+        bits = command.tobytes()
+        changed = self._last_command is not None and bits != self._last_command
+        self._last_command = bits
+        window = (1 << (self.periods + MEASUREMENT_LAG)) - 1  # older changes are judged
+        self._changes = ((self._changes << 1) | changed) & window
+        self._commands += 1
+
+    def _repeat_is_stale(self) -> bool:
+        """Whether the whole sample's repeat is stale: see the class (commands sent).
+
+        Bit b of the changes is the command sent b + 1 periods before this sample; one
+        at least :data:`MEASUREMENT_LAG` old and sent after the repeat began shows in it.
+        """
+        runs = int(self._runs[self.n])
+        if self._commands < runs:  # some of the repeat came with no command known
+            return True
+        inside = (1 << max(runs - 1 - MEASUREMENT_LAG, 0)) - 1
+        return bool((self._changes >> MEASUREMENT_LAG) & inside)
 
     def update(self, q: FloatArray, qd: FloatArray, tau: FloatArray | None = None) -> str | None:
         """Count one sample (q [rad], q̇ [rad/s], τ [Nm] or None, shape (n,)): why stale, or None."""
@@ -226,7 +261,7 @@ class FrozenEncoders:
 
     def reason(self, count: int) -> str | None:
         """Why the sample :meth:`count` returned ``count`` for is stale, else None."""
-        if count < 0:
+        if count < 0 or (count == self.n and not self._repeat_is_stale()):
             return None
         runs = self._runs[count]
         if count == self.n:
@@ -244,7 +279,7 @@ class FrozenEncoders:
         if self.periods == 0:
             return np.zeros(self.n, dtype=bool)
         repeated = self._runs >= self.periods
-        return repeated[: self.n] | repeated[self.n]
+        return repeated[: self.n] | (repeated[self.n] and self._repeat_is_stale())
 
 
 @kernel

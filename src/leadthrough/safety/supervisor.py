@@ -251,10 +251,13 @@ class SafetySupervisor:
             if self.state is not SupervisorState.FAULT:
                 tau = self._supervised(floats(q), as_floats(qd), as_floats(tau_desired), model)
                 if tau is not None:
+                    self._encoders.sent(tau)
                     return tau
         except Exception as error:  # nothing may escape on the motor path
             self._fault(failure("command", error))
-        return self._safe_stop(qd)
+        tau = self._safe_stop(qd)
+        self._encoders.sent(tau)
+        return tau
 
     def record_cycle(self, t: float, duration: float) -> None:
         """Count a missed deadline when one control cycle took longer than ``dt``.
