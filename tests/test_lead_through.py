@@ -320,6 +320,22 @@ def test_the_recorder_keeps_each_periods_values_not_the_controllers_buffers(yumi
     assert estimate[0] is not estimate[-1]
 
 
+def test_step_takes_the_specs_keywords_and_gives_the_positional_forms_command(yumi):
+    """``step(q=…, qd=…, tau_measured=…)`` (SPEC §10) is ``step(q, qd, tau)``, sample by sample.
+
+    As found: the first parameter was named ``state``, so the SPEC's keywords were a
+    TypeError.
+    """
+    q, rng = yumi.home(), np.random.default_rng(5)
+    gravity = lt.Dynamics(yumi).gravity(q)
+    by_position, by_keyword = LeadThrough(yumi, "active"), LeadThrough(yumi, "active")
+    for _ in range(50):
+        qd, tau = rng.normal(0.0, 1e-3, 7), gravity + rng.normal(0.0, 0.01, 7)
+        expected = by_position.step(q, qd, tau)
+        np.testing.assert_array_equal(by_keyword.step(q=q, qd=qd, tau_measured=tau), expected)
+    assert by_keyword.state == "teaching"
+
+
 def test_positional_samples_go_on_from_the_latest_stamp(yumi):
     """A session that switches from stamped to positional samples: its clock goes on.
 

@@ -185,6 +185,19 @@ def test_progress_and_done_follow_the_clock(dyn):
     assert not done[times < 2.0 + plan.duration + 0.5 - 1e-6].any() and done[-1]
 
 
+def test_a_replayer_takes_the_specs_keywords_as_a_controller_does(dyn):
+    """``step(q=…, qd=…, tau_measured=…)``: the same commands as the positional form."""
+    t, q = taught_path()
+    plan = plan_replay(t, q, dyn)
+    by_position, by_keyword = Replayer(plan, dyn, dt=DT), Replayer(plan, dyn, dt=DT)
+    rng = np.random.default_rng(6)
+    for _ in range(50):
+        q_now, qd_now, _ = by_position.reference(by_position.time)
+        qd_now = qd_now + 1e-6 * rng.normal(size=N)
+        expected = by_position.step(q_now, qd_now)
+        np.testing.assert_array_equal(by_keyword.step(q=q_now, qd=qd_now), expected)
+
+
 def test_replay_is_supervised_in_holding_mode(dyn):
     """A teaching supervisor is switched to HOLDING; a NaN reading gives the safe stop."""
     t, q = taught_path()

@@ -443,24 +443,27 @@ class LeadThrough:
 
     def step(
         self,
-        state: JointState | ArrayLike,
+        q: JointState | ArrayLike,
         qd: ArrayLike | None = None,
         tau_measured: ArrayLike | None = None,
     ) -> FloatArray:
         """Motor torque command [Nm] for this period (always finite, within the limits).
 
+        ``step(q, qd, tau_measured)`` (SPEC §10, keywords too), or ``step(state)`` with
+        the robot's whole sample.
+
         Args:
-            state: The robot's sample (t [s], q [rad], q̇ [rad/s], τ_measured [Nm]); or,
-                positional form, the joint readings q [rad].
-            qd: Positional form only: joint velocities [rad/s].
-            tau_measured: Positional form only: motor torque measured over the last
-                period [Nm], if the robot reports one; otherwise the command sent
+            q: The joint readings q [rad]; or the robot's sample, a :class:`JointState`
+                (t [s], q [rad], q̇ [rad/s], τ_measured [Nm]), and nothing else given.
+            qd: Joint velocities [rad/s] (with q only).
+            tau_measured: Motor torque measured over the last period [Nm] (with q only),
+                if the robot reports one; otherwise the command sent
                 ``measurement_delay`` steps ago stands for it.
 
         An exception inside the step latches the supervisor's fault, naming the exception
         and the component it came from, and the safe stop is returned this period.
         """
-        stamp, q, qd, tau_measured = self._sample(state, qd, tau_measured)
+        stamp, q, qd, tau_measured = self._sample(q, qd, tau_measured)
         supervisor = self.supervisor
         if not supervisor.check(stamp, q, qd, tau_measured):  # the time stamp too
             zeros = np.zeros(self.robot.n_joints)

@@ -344,23 +344,23 @@ class Replayer:
 
     def step(
         self,
-        state: JointState | ArrayLike,
+        q: JointState | ArrayLike,
         qd: ArrayLike | None = None,
         tau_measured: ArrayLike | None = None,
     ) -> FloatArray:
         """Motor torque command [Nm] for this period (always finite, within the limits).
 
         Args:
-            state: The robot's sample (t [s], q [rad], q̇ [rad/s], τ [Nm]); or, positional
-                form, the joint readings q [rad], (n,).
-            qd: Positional form only: joint velocities [rad/s], (n,).
-            tau_measured: Positional form only: measured motor torque [Nm], (n,), or None
-                (only checked).
+            q: The joint readings q [rad], (n,); or the robot's sample, a
+                :class:`JointState` (t [s], q [rad], q̇ [rad/s], τ [Nm]), and nothing else.
+            qd: Joint velocities [rad/s], (n,) (with q only).
+            tau_measured: Measured motor torque [Nm], (n,), or None (only checked; with q
+                only).
 
         An exception inside the step latches the supervisor's fault naming it, and the
         safe stop is returned this period.
         """
-        sample = joint_state(state, qd, tau_measured, self._steps * self.dt)
+        sample = joint_state(q, qd, tau_measured, self._steps * self.dt)
         t, q, qd, tau_measured = sample.t, sample.q, sample.qd, sample.tau_measured
         self._steps += 1
         if self._t0 is None:
