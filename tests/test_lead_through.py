@@ -336,6 +336,16 @@ def test_step_takes_the_specs_keywords_and_gives_the_positional_forms_command(yu
     assert by_keyword.state == "teaching"
 
 
+def test_a_sample_without_a_torque_measurement_needs_no_torque_argument(yumi):
+    """``JointState(t, q, qd)``: τ_measured None, as ``step(q, qd)``'s, command for command."""
+    q, qd = yumi.home(), np.full(yumi.n_joints, 1e-3)
+    stamped, positional = LeadThrough(yumi, "passive"), LeadThrough(yumi, "passive")
+    for k in range(20):
+        expected = positional.step(q, qd + 1e-4 * k)
+        command = stamped.step(lt.JointState(0.004 * (k + 1), q, qd + 1e-4 * k))
+        np.testing.assert_array_equal(command, expected)
+
+
 def test_positional_samples_go_on_from_the_latest_stamp(yumi):
     """A session that switches from stamped to positional samples: its clock goes on.
 

@@ -26,7 +26,7 @@ class JointState:
         q: Joint readings (encoders, quantised) [rad], shape (n,).
         qd: Joint velocities as the robot reports them (noisy) [rad/s], shape (n,).
         tau_measured: Motor torque actually applied, as measured, arm side [Nm], shape (n,),
-            or None for a robot that measures none.
+            or None (the default) for a robot that measures none.
         enabling: The hand-guiding enabling device that ISO 10218-1 asks of hand
             guiding, as the robot reports it: True while it is held, False while it is
             released, None for a robot without one. One that only a hand on the arm can
@@ -37,7 +37,7 @@ class JointState:
     t: float
     q: FloatArray
     qd: FloatArray
-    tau_measured: FloatArray | None
+    tau_measured: FloatArray | None = None
     enabling: bool | None = None
 
 
