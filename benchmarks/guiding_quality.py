@@ -35,6 +35,7 @@ Usage:
         [--plants FIELD=VALUE ...]    (another family: twin.plants.PlantRanges fields, e.g.
                                        position_amplitude=0.25 friction_scale=0.7,1.3)
         [--dt 0.001]                  (another control rate: plants and controllers, 1 kHz)
+        [--no-torque-sensor]          (drives that report no torque: tau_measured None)
         [--identified]                (both modes with each plant's friction identified
                                        first, as `leadthrough identify` would on the arm)
 """
@@ -181,7 +182,7 @@ def plant_ranges(settings: list[str] | None) -> PlantRanges:
             (one line naming it).
     """
     defaults, changes = PlantRanges(), {}
-    # the ranges (--enabling-device sets the one switch)
+    # the ranges (--enabling-device and --no-torque-sensor set the switches)
     known = [f.name for f in fields(PlantRanges) if not isinstance(f.default, bool)]
     for setting in settings or []:
         name, _, text = setting.partition("=")
@@ -253,6 +254,12 @@ def main(argv: list[str] | None = None) -> None:
         "250 Hz; 0.001 for a 1 kHz arm; the delay stays 1-2 periods)",
     )
     parser.add_argument(
+        "--no-torque-sensor",
+        action="store_true",
+        help="plants whose drives report no torque (JointState.tau_measured None): both "
+        "modes take the command they sent for it",
+    )
+    parser.add_argument(
         "--identified",
         action="store_true",
         help="identify each plant's friction first (the excitation of leadthrough identify, "
@@ -280,7 +287,8 @@ def main(argv: list[str] | None = None) -> None:
     if unknown:
         parser.error(f"unknown hand(s) {', '.join(unknown)}: choose from {', '.join(HANDS)}")
     try:
-        ranges = replace(plant_ranges(args.plants), enabling_device=args.enabling_device)
+        ranges = replace(plant_ranges(args.plants), enabling_device=args.enabling_device,
+                         torque_sensor=not args.no_torque_sensor)  # fmt: skip
     except ValueError as error:
         parser.error(str(error))
     try:

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import guiding_quality
+import leadthrough as lt
 
 
 def test_seed_ranges_and_lists():
@@ -185,3 +186,22 @@ def test_an_unknown_tip_is_a_one_line_error(robots_dir, capsys):
     with pytest.raises(SystemExit):
         guiding_quality.main(["--robot", str(urdf), "--tip", "tool"])
     assert "did you mean 'tool0'?" in capsys.readouterr().err.strip().splitlines()[-1]
+
+
+def test_drives_without_a_torque_sensor_are_a_switch_and_report_none(capsys):
+    """``--no-torque-sensor``: the plants' samples carry no torque; the run logs NaN there."""
+    from leadthrough.model import robots
+    from leadthrough.twin.plants import PlantRanges, sample_plant
+    from leadthrough.twin.runner import simulate
+    from leadthrough.twin.simulator import DigitalTwin
+
+    yumi = robots.yumi()
+    plant = sample_plant(yumi, 1, "lugre", PlantRanges(torque_sensor=False))
+    twin = DigitalTwin(yumi, plant.config)
+    assert twin.read_state().tau_measured is None
+    assert sample_plant(yumi, 1, "lugre").config.sensors.torque_sensor
+    run = simulate(twin, lt.LeadThrough(yumi, mode="active", dt=0.004), 0.2, progress=False)
+    assert np.isnan(run.tau_measured).all() and np.isfinite(run.tau_command).all()
+    with pytest.raises(SystemExit):
+        guiding_quality.main(["--plants", "torque_sensor=0"])
+    assert "unknown field 'torque_sensor'" in capsys.readouterr().err

@@ -57,6 +57,8 @@ class PlantRanges:
         position_amplitude: Relative position dependence of the dry friction [–].
         enabling_device: Whether the arms have a hand-guiding enabling device, held while
             the operator holds the arm (``TwinConfig.enabling_device``; not drawn).
+        torque_sensor: Whether the drives report the torque they apply
+            (``SensorModel.torque_sensor``; not drawn).
     """
 
     mass_error: float = 0.05
@@ -72,6 +74,7 @@ class PlantRanges:
     velocity_cutoff: tuple[float, float] = (15.0, 40.0)
     position_amplitude: float = 0.15
     enabling_device: bool = False
+    torque_sensor: bool = True
 
     def __post_init__(self) -> None:
         for name, (allowed, text) in _RANGE_RULES.items():
@@ -167,6 +170,7 @@ def sample_plant(
         torque_gain=tuple(float(x) for x in rng.uniform(*r.torque_gain, n)),
         torque_offset=tuple(float(x) for x in rng.uniform(*r.torque_offset, n)),
         velocity_cutoff=float(rng.uniform(*r.velocity_cutoff)),
+        torque_sensor=r.torque_sensor,
     )
     low, high = r.delay_periods
     config = TwinConfig(

@@ -29,7 +29,7 @@ class SimulationResult:
         t: Sample times [s], (N,).
         q: Joint readings [rad], (N, n).
         qd: Reported joint velocities [rad/s], (N, n).
-        tau_measured: Measured motor torque [Nm], (N, n).
+        tau_measured: Measured motor torque [Nm], (N, n); NaN where the drives report none.
         tau_command: Commanded torque [Nm], (N, n).
         q_true: True joint angles [rad], (N, n).
         qd_true: True joint velocities [rad/s], (N, n).
@@ -134,7 +134,8 @@ def _record(log: dict[str, list], state: JointState, command: FloatArray, truth:
     log["t"].append(state.t)
     log["q"].append(state.q)
     log["qd"].append(state.qd)
-    log["tau_measured"].append(state.tau_measured)
+    measured = state.tau_measured  # NaN where the drives report none
+    log["tau_measured"].append(np.full(len(state.q), np.nan) if measured is None else measured)
     log["tau_command"].append(np.array(command, dtype=float))
     log["q_true"].append(truth.q)
     log["qd_true"].append(truth.qd)

@@ -39,6 +39,8 @@ class SensorModel:
         torque_offset: Offset of the measured motor torque per joint [Nm]; None is 0.
         velocity_cutoff: Corner frequency [Hz] of the first-order low-pass on the
             differenced encoder angle; None reports the true velocity plus white noise.
+        torque_sensor: Whether the drives report the torque they apply; False: a robot
+            that measures none (``JointState.tau_measured`` is None).
     """
 
     encoder_counts: int = 2**14
@@ -49,6 +51,7 @@ class SensorModel:
     torque_gain: tuple[float, ...] | None = None
     torque_offset: tuple[float, ...] | None = None
     velocity_cutoff: float | None = None
+    torque_sensor: bool = True
 
     def __post_init__(self) -> None:
         real("encoder_counts", self.encoder_counts, minimum=1.0)

@@ -243,7 +243,8 @@ class DigitalTwin(RobotInterface):
     def read_state(self) -> JointState:
         """Encoder angles, noisy velocities, measured motor torque and enabling device, now.
 
-        The enabling device only when the arm has one (``TwinConfig.enabling_device``).
+        The measured torque only when the drives report one (``SensorModel.torque_sensor``),
+        the enabling device only when the arm has one (``TwinConfig.enabling_device``).
         """
         enabling = None
         if self.config.enabling_device:
@@ -252,9 +253,14 @@ class DigitalTwin(RobotInterface):
             t=self.time,
             q=self.sensors.joint_position(self.data.qpos),
             qd=self.sensors.joint_velocity(self.data.qvel, self.data.qpos),
-            tau_measured=self.sensors.motor_torque(self._tau_motor),
+            tau_measured=self._measured_torque(),
             enabling=enabling,
         )
+
+    def _measured_torque(self) -> FloatArray | None:
+        if not self.config.sensors.torque_sensor:
+            return None
+        return self.sensors.motor_torque(self._tau_motor)
 
     def send_torque(self, tau: ArrayLike) -> None:
         """Queue ``tau`` [Nm] and simulate one control period.
