@@ -36,6 +36,7 @@ Usage:
                                        position_amplitude=0.25 friction_scale=0.7,1.3)
         [--dt 0.001]                  (another control rate: plants and controllers, 1 kHz)
         [--no-torque-sensor]          (drives that report no torque: tau_measured None)
+        [--pace 2]                    (hands twice as slow: lines in 8 s, the circle in 12 s)
         [--identified]                (both modes with each plant's friction identified
                                        first, as `leadthrough identify` would on the arm)
 """
@@ -46,6 +47,7 @@ import argparse
 import functools
 import importlib
 import json
+import math
 import sys
 import time
 from dataclasses import asdict, fields, replace
@@ -254,6 +256,13 @@ def main(argv: list[str] | None = None) -> None:
         "250 Hz; 0.001 for a 1 kHz arm; the delay stays 1-2 periods)",
     )
     parser.add_argument(
+        "--pace",
+        type=float,
+        default=1.0,
+        help="the hands' paths take this many times their duration (default 1: lines in "
+        "4 s, the circle in 6 s; 2 is a hand twice as slow)",
+    )
+    parser.add_argument(
         "--no-torque-sensor",
         action="store_true",
         help="plants whose drives report no torque (JointState.tau_measured None): both "
@@ -299,6 +308,8 @@ def main(argv: list[str] | None = None) -> None:
         robot = robot_from(args)
     except RobotDescriptionError as error:
         parser.error(str(error))
+    if not (math.isfinite(args.pace) and args.pace > 0.0):
+        parser.error(f"--pace must be a number > 0, got {args.pace:g}")
     total, start = len(cases(args.cases, seeds, hands, ranges)), time.perf_counter()
 
     def report(name: str, figures: dict[str, float]) -> None:
@@ -311,7 +322,7 @@ def main(argv: list[str] | None = None) -> None:
     reported: list[str] = []
     print(HEADER)
     results, stats = evaluate(args.cases, factory, robot, report, seeds,
-                              passive_factory, hands, ranges)  # fmt: skip
+                              passive_factory, hands, ranges, args.pace)  # fmt: skip
     print_summary(stats, old)
     print(over_goal_line(results))
     print(uncalibrated_line(results))

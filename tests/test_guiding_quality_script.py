@@ -205,3 +205,22 @@ def test_drives_without_a_torque_sensor_are_a_switch_and_report_none(capsys):
     with pytest.raises(SystemExit):
         guiding_quality.main(["--plants", "torque_sensor=0"])
     assert "unknown field 'torque_sensor'" in capsys.readouterr().err
+
+
+def test_a_pace_stretches_every_path_and_names_its_cases(capsys):
+    """``--pace 2``: every path twice as long, at half the speed; a pace ≤ 0 is refused."""
+    from leadthrough.experiments.guiding import Case, case_path, cases
+    from leadthrough.model import robots
+
+    yumi = robots.yumi()
+    slow = cases("full", (1,), pace=2.0)
+    assert {c.pace for c in slow} == {2.0} and slow[0].name.endswith(" pace 2")
+    for name in ("sideways", "circle"):
+        base, stretched = case_path(yumi, name), case_path(yumi, name, pace=2.0)
+        assert stretched.duration == 2.0 * base.duration
+        np.testing.assert_allclose(stretched.position(2.0 * 0.3 * base.duration),
+                                   base.position(0.3 * base.duration))  # fmt: skip
+    assert Case("dry", 1, "relaxed", "sideways").name == "dry#1 relaxed sideways"
+    with pytest.raises(SystemExit):
+        guiding_quality.main(["--pace", "0"])
+    assert "--pace must be a number > 0, got 0" in capsys.readouterr().err

@@ -107,6 +107,8 @@ class Case:
         path: One of :data:`PATH_NAMES`.
         ranges: The family the plant is drawn from (default the issue's, :class:`PlantRanges`;
             a wider one judges defaults beyond the plants they were developed on).
+        pace: The hand's path takes ``pace`` times its duration (:data:`LINE_DURATION`,
+            :data:`CIRCLE_DURATION`): 2 is a hand twice as slow [–].
     """
 
     physics: str
@@ -114,11 +116,13 @@ class Case:
     hand: str
     path: str
     ranges: PlantRanges = field(default_factory=PlantRanges)
+    pace: float = 1.0
 
     @property
     def name(self) -> str:
-        """Short label, e.g. ``dry#1 stiff sideways``."""
-        return f"{self.physics}#{self.seed} {self.hand} {self.path}"
+        """Short label, e.g. ``dry#1 stiff sideways`` (``… pace 2`` at another pace)."""
+        label = f"{self.physics}#{self.seed} {self.hand} {self.path}"
+        return label if self.pace == 1.0 else f"{label} pace {self.pace:g}"
 
 
 @dataclass(frozen=True)
@@ -182,6 +186,7 @@ def cases(
     seeds: Sequence[int] = DEVELOPMENT_SEEDS,
     hands: Sequence[str] = BENCHMARK_HANDS,
     ranges: PlantRanges | None = None,
+    pace: float = 1.0,
 ) -> list[Case]:
     """The benchmark's cases: ``"full"`` (14 per seed and physics), ``"quick"`` or ``"contact"``.
 
@@ -193,7 +198,14 @@ def cases(
         seeds: Plant seeds of the full set (default the development seeds, 56 cases).
         hands: Hands of the full set's lines (:data:`HANDS`); the circle takes the first.
         ranges: The plant family of every case (default :class:`PlantRanges`).
+        pace: Every hand's path takes ``pace`` times its duration (:attr:`Case.pace`).
     """
+    return [replace(case, pace=pace) for case in _cases(kind, seeds, hands, ranges)]
+
+
+def _cases(
+    kind: str, seeds: Sequence[int], hands: Sequence[str], ranges: PlantRanges | None
+) -> list[Case]:
     r = ranges or PlantRanges()
     if kind == "quick":
         return [Case("dry", 1, "stiff", "sideways", r), Case("dry", 2, "relaxed", "upwards", r),
@@ -210,15 +222,21 @@ def cases(
     return full
 
 
-def case_path(robot: RobotDescription, name: str, start: FloatArray | None = None) -> Path:
-    """The hand's path ``name`` from ``start`` [m, world] (default: the flange at home)."""
+def case_path(
+    robot: RobotDescription, name: str, start: FloatArray | None = None, pace: float = 1.0
+) -> Path:
+    """The hand's path ``name`` from ``start`` [m, world] (default: the flange at home).
+
+    ``pace``: the path takes that many times its duration (:attr:`Case.pace`).
+    """
     start = _home_flange(robot) if start is None else start
+    line = LINE_DURATION * pace
     if name == PRESS:
-        return Line(start, start - np.array([0.0, 0.0, PRESS_DEPTH]), duration=LINE_DURATION)
+        return Line(start, start - np.array([0.0, 0.0, PRESS_DEPTH]), duration=line)
     if name == "circle":
         return Circle(start + np.array([0.0, 0.08, 0.0]), 0.08, (0.0, 0.0, 1.0),
-                      (0.0, -1.0, 0.0), duration=CIRCLE_DURATION)  # fmt: skip
-    return Line(start, start + np.array(LINES[name]), duration=LINE_DURATION)
+                      (0.0, -1.0, 0.0), duration=CIRCLE_DURATION * pace)  # fmt: skip
+    return Line(start, start + np.array(LINES[name]), duration=line)
 
 
 def _home_flange(robot: RobotDescription) -> FloatArray:
@@ -347,7 +365,7 @@ def _run(
     if observe_truth is not None:  # an oracle (diagnosis): reads the twin's truth
         observe_truth(twin)
     before = simulate(twin, recorder, grab, progress=False)
-    path = case_path(robot, case.path, twin.truth.flange_pose[:3, 3].copy())
+    path = case_path(robot, case.path, twin.truth.flange_pose[:3, 3].copy(), case.pace)
     hand = Hand.from_parameters(path, HANDS[case.hand])
     grabbed = twin.time
     twin.operator = During(hand, grabbed, grabbed + release)
@@ -376,7 +394,7 @@ def run_case(
     """
     robot = _robot_or_yumi(robot)
     factory = controller_factory or default_factory
-    path = case_path(robot, case.path)
+    path = case_path(robot, case.path, pace=case.pace)
     held, recorder = _run(robot, case, mode, factory, np.inf, path.duration + HOLD)
     release_at = 0.75 * path.duration
     let_go, _ = _run(robot, case, mode, factory, release_at, release_at + 0.5 + REST)
@@ -449,7 +467,7 @@ def vibration_windows(
     over the whole run) in consecutive windows of ``window`` s from the grab on.
     """
     robot = _robot_or_yumi(robot)
-    path = case_path(robot, case.path)
+    path = case_path(robot, case.path, pace=case.pace)
     factory = controller_factory or default_factory
     held, _ = _run(robot, case, mode, factory, np.inf, path.duration + HOLD)
     dt = float(held.t[1] - held.t[0])
@@ -508,7 +526,7 @@ def effort_split(
             different periods).
     """
     robot = _robot_or_yumi(robot)
-    path = case_path(robot, case.path)
+    path = case_path(robot, case.path, pace=case.pace)
     passive, active = (_run(robot, case, mode, factory or default_factory, np.inf,
                             path.duration + HOLD)[0]
                        for mode, factory in (("passive", passive_factory),
@@ -688,6 +706,7 @@ def evaluate(
     passive_factory: ControllerFactory | None = None,
     hands: Sequence[str] = BENCHMARK_HANDS,
     ranges: PlantRanges | None = None,
+    pace: float = 1.0,
 ) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, float]]]:
     """Every case of ``cases(kind)``: default passive against the active controller.
 
@@ -704,13 +723,14 @@ def evaluate(
         hands: Hands of the full set (:func:`cases`).
         ranges: The plant family (default :class:`PlantRanges`, the one the defaults were
             developed on; e.g. ``PlantRanges(position_amplitude=0.25)`` is held out).
+        pace: Every hand's path takes ``pace`` times its duration (:attr:`Case.pace`).
 
     Returns:
         The figures per case name (:func:`figures`) and their :func:`summary`.
     """
     robot = _robot_or_yumi(robot)
     results = {}
-    for case in cases(kind, seeds, hands, ranges):
+    for case in cases(kind, seeds, hands, ranges, pace):
         passive = run_case(case, "passive", passive_factory, robot=robot)
         active = run_case(case, "active", controller_factory, robot=robot)
         results[case.name] = figures(passive, active)
