@@ -37,6 +37,7 @@ Usage:
         [--dt 0.001]                  (another control rate: plants and controllers, 1 kHz)
         [--no-torque-sensor]          (drives that report no torque: tau_measured None)
         [--pace 2]                    (hands twice as slow: lines in 8 s, the circle in 12 s)
+        [--grab-at-once]              (hands that grab while the arm calibrates)
         [--identified]                (both modes with each plant's friction identified
                                        first, as `leadthrough identify` would on the arm)
 """
@@ -263,6 +264,12 @@ def main(argv: list[str] | None = None) -> None:
         "4 s, the circle in 6 s; 2 is a hand twice as slow)",
     )
     parser.add_argument(
+        "--grab-at-once",
+        action="store_true",
+        help="every hand grabs as the run starts, while the arm calibrates (an operator who "
+        "does not wait): both modes",
+    )
+    parser.add_argument(
         "--no-torque-sensor",
         action="store_true",
         help="plants whose drives report no torque (JointState.tau_measured None): both "
@@ -322,7 +329,8 @@ def main(argv: list[str] | None = None) -> None:
     reported: list[str] = []
     print(HEADER)
     results, stats = evaluate(args.cases, factory, robot, report, seeds,
-                              passive_factory, hands, ranges, args.pace)  # fmt: skip
+                              passive_factory, hands, ranges, args.pace,
+                              args.grab_at_once)  # fmt: skip
     print_summary(stats, old)
     print(over_goal_line(results))
     print(uncalibrated_line(results))

@@ -224,3 +224,25 @@ def test_a_pace_stretches_every_path_and_names_its_cases(capsys):
     with pytest.raises(SystemExit):
         guiding_quality.main(["--pace", "0"])
     assert "--pace must be a number > 0, got 0" in capsys.readouterr().err
+
+
+def test_hands_that_grab_at_once_are_named_and_find_the_arm_calibrating():
+    """``--grab-at-once``: the hand takes the arm as the run starts, while it calibrates.
+
+    The calibrated controller (``calibrate=True``) then reads the hand and refuses its
+    calibration, where a hand that waits finds it accepted.
+    """
+    from leadthrough.experiments.guiding import Case, _run, cases, default_factory
+    from leadthrough.model import robots
+
+    assert all(c.grab_at_once for c in cases("quick", grab_at_once=True))
+    case = Case("dry", 9, "relaxed", "circle", grab_at_once=True)
+    assert case.name == "dry#9 relaxed circle at once"
+    yumi = robots.yumi()
+    at_once, recorder = _run(yumi, case, "active", default_factory, np.inf, 1.5)
+    assert at_once.t[0] == 0.0 and at_once.operator_force[: len(at_once.t) // 2].any()
+    assert not recorder.controller.calibration.accepted
+    assert "touched" in recorder.controller.calibration.reason
+    waited = Case("dry", 9, "relaxed", "circle")
+    _, recorder = _run(yumi, waited, "active", default_factory, np.inf, 0.1)
+    assert recorder.controller.calibration.accepted

@@ -109,6 +109,9 @@ class Case:
             a wider one judges defaults beyond the plants they were developed on).
         pace: The hand's path takes ``pace`` times its duration (:data:`LINE_DURATION`,
             :data:`CIRCLE_DURATION`): 2 is a hand twice as slow [–].
+        grab_at_once: The hand grabs as the run starts, while the arm may still calibrate
+            (an operator who does not wait); else once the controller's
+            ``calibration_time`` is over.
     """
 
     physics: str
@@ -117,12 +120,18 @@ class Case:
     path: str
     ranges: PlantRanges = field(default_factory=PlantRanges)
     pace: float = 1.0
+    grab_at_once: bool = False
 
     @property
     def name(self) -> str:
-        """Short label, e.g. ``dry#1 stiff sideways`` (``… pace 2`` at another pace)."""
+        """Short label, e.g. ``dry#1 stiff sideways``.
+
+        ``… pace 2`` at another pace, ``… at once`` for a hand that grabs at once.
+        """
         label = f"{self.physics}#{self.seed} {self.hand} {self.path}"
-        return label if self.pace == 1.0 else f"{label} pace {self.pace:g}"
+        if self.pace != 1.0:
+            label = f"{label} pace {self.pace:g}"
+        return f"{label} at once" if self.grab_at_once else label
 
 
 @dataclass(frozen=True)
@@ -187,6 +196,7 @@ def cases(
     hands: Sequence[str] = BENCHMARK_HANDS,
     ranges: PlantRanges | None = None,
     pace: float = 1.0,
+    grab_at_once: bool = False,
 ) -> list[Case]:
     """The benchmark's cases: ``"full"`` (14 per seed and physics), ``"quick"`` or ``"contact"``.
 
@@ -199,8 +209,10 @@ def cases(
         hands: Hands of the full set's lines (:data:`HANDS`); the circle takes the first.
         ranges: The plant family of every case (default :class:`PlantRanges`).
         pace: Every hand's path takes ``pace`` times its duration (:attr:`Case.pace`).
+        grab_at_once: Every hand grabs as the run starts (:attr:`Case.grab_at_once`).
     """
-    return [replace(case, pace=pace) for case in _cases(kind, seeds, hands, ranges)]
+    return [replace(case, pace=pace, grab_at_once=grab_at_once)
+            for case in _cases(kind, seeds, hands, ranges)]  # fmt: skip
 
 
 def _cases(
@@ -348,7 +360,8 @@ def _run(
     """One run from the grab on (t = 0 at the grab) and what the controller estimated.
 
     The hand grabs the flange where it is once the calibration is over (the calibration
-    may have moved the arm a little): its path starts there. The plant runs at the
+    may have moved the arm a little), or at once (:attr:`Case.grab_at_once`): its path
+    starts there. The plant runs at the
     controller's period (``dt``, 4 ms when it has none); its delay is in periods.
     """
     plant = sample_plant(robot, case.seed, case.physics, case.ranges)
@@ -356,7 +369,8 @@ def _run(
         recorder = _Recorder(factory.controller(robot, mode, plant.config))
     else:
         recorder = _Recorder(factory(robot, mode))
-    grab = float(getattr(recorder.controller, "calibration_time", CalibrationParameters().duration))
+    calibrating = getattr(recorder.controller, "calibration_time", CalibrationParameters().duration)
+    grab = 0.0 if case.grab_at_once else float(calibrating)
     config = replace(plant.config, control_dt=recorder.dt or plant.config.control_dt)
     if case.path == PRESS:  # a table under the tool (which points down at home)
         config = replace(config, table=TableSurface.below_tool(_home_flange(robot), TABLE_GAP))
@@ -707,6 +721,7 @@ def evaluate(
     hands: Sequence[str] = BENCHMARK_HANDS,
     ranges: PlantRanges | None = None,
     pace: float = 1.0,
+    grab_at_once: bool = False,
 ) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, float]]]:
     """Every case of ``cases(kind)``: default passive against the active controller.
 
@@ -724,13 +739,14 @@ def evaluate(
         ranges: The plant family (default :class:`PlantRanges`, the one the defaults were
             developed on; e.g. ``PlantRanges(position_amplitude=0.25)`` is held out).
         pace: Every hand's path takes ``pace`` times its duration (:attr:`Case.pace`).
+        grab_at_once: Every hand grabs as the run starts (:attr:`Case.grab_at_once`).
 
     Returns:
         The figures per case name (:func:`figures`) and their :func:`summary`.
     """
     robot = _robot_or_yumi(robot)
     results = {}
-    for case in cases(kind, seeds, hands, ranges, pace):
+    for case in cases(kind, seeds, hands, ranges, pace, grab_at_once):
         passive = run_case(case, "passive", passive_factory, robot=robot)
         active = run_case(case, "active", controller_factory, robot=robot)
         results[case.name] = figures(passive, active)
