@@ -110,6 +110,26 @@ def test_sampler_is_seeded_and_within_its_ranges(robot):
     assert repr(sample_plant(robot, 1, "dry")) != repr(sample_plant(robot, 2, "dry"))
 
 
+def test_a_start_spread_moves_only_where_the_arm_starts(robot):
+    """``start_spread``: each joint within ±spread of home and 0.4 rad inside its limits.
+
+    The start is drawn from a stream of its own: the plant is otherwise the one without a
+    spread, and the twin built with it rests there.
+    """
+    from leadthrough.twin.plants import START_MARGIN
+
+    assert sample_plant(robot, 3, "lugre").start is None
+    for seed in range(1, 9):
+        plant = sample_plant(robot, seed, "dry", PlantRanges(start_spread=0.5))
+        assert repr(plant.config) == repr(sample_plant(robot, seed, "dry").config)
+        offset = plant.start - robot.home()
+        assert np.all(np.abs(offset) <= 0.5) and np.any(np.abs(offset) > 0.1)
+        assert np.all(plant.start >= robot.q_min + START_MARGIN - 1e-12)
+        assert np.all(plant.start <= robot.q_max - START_MARGIN + 1e-12)
+    twin = DigitalTwin(robot, plant.config, q0=plant.start)
+    np.testing.assert_allclose(twin.read_state().q, plant.start, atol=1e-3)
+
+
 def test_differenced_velocity_lags_the_truth(robot):
     """A low-passed difference of the encoder reports a ramp late, by ~dt/2 + 1/(2π f_c)."""
     sensors = SensorModel(velocity_noise_std=0.0, velocity_cutoff=20.0)
@@ -226,6 +246,7 @@ def test_benchmark_seeds_and_uncalibrated_factory(robot):
     ("static_ratio", (0.9, 1.2), "static_ratio: must be ≥ 1"),
     ("delay_periods", (1, 2.5), "delay_periods: must be whole periods ≥ 0"),
     ("torque_offset", (-0.1, float("nan")), "torque_offset: must be finite"),
+    ("start_spread", -0.1, "start_spread: must be ≥ 0, got -0.1"),
 ])  # fmt: skip
 def test_a_plant_range_outside_what_it_allows_is_a_one_line_error(field, value, says):
     """A family is checked where it is made, not when a plant of it is drawn mid-run."""

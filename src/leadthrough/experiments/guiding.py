@@ -374,7 +374,7 @@ def _run(
     config = replace(plant.config, control_dt=recorder.dt or plant.config.control_dt)
     if case.path == PRESS:  # a table under the tool (which points down at home)
         config = replace(config, table=TableSurface.below_tool(_home_flange(robot), TABLE_GAP))
-    twin = DigitalTwin(robot, config)
+    twin = DigitalTwin(robot, config, q0=plant.start)
     observe_truth = getattr(recorder.controller, "observe_truth", None)
     if observe_truth is not None:  # an oracle (diagnosis): reads the twin's truth
         observe_truth(twin)

@@ -59,6 +59,10 @@ class PlantRanges:
             the operator holds the arm (``TwinConfig.enabling_device``; not drawn).
         torque_sensor: Whether the drives report the torque they apply
             (``SensorModel.torque_sensor``; not drawn).
+        start_spread: How far from the home pose each joint may start [rad]: uniform
+            within ±spread, kept :data:`START_MARGIN` inside the joint's limits; 0 starts
+            every plant at home. Drawn from a stream of its own, so the plant is otherwise
+            the same.
     """
 
     mass_error: float = 0.05
@@ -75,6 +79,7 @@ class PlantRanges:
     position_amplitude: float = 0.15
     enabling_device: bool = False
     torque_sensor: bool = True
+    start_spread: float = 0.0
 
     def __post_init__(self) -> None:
         for name, (allowed, text) in _RANGE_RULES.items():
@@ -99,7 +104,12 @@ _RANGE_RULES: dict[str, tuple[Callable[[float], bool], str]] = {
     "torque_offset": (lambda x: True, "finite"),
     "velocity_cutoff": (lambda x: x > 0.0, "> 0"),
     "position_amplitude": (lambda x: 0.0 <= x < 1.0, "in [0, 1)"),
+    "start_spread": (lambda x: x >= 0.0, "≥ 0"),
 }
+
+#: How far inside its limits a joint starts, at least [rad]: two of the lead-through
+#: controller's limit zones, outside the band where its compensation fades.
+START_MARGIN = 0.4
 
 
 #: A family wider than the one the defaults were developed on: friction levels 0.7–1.3 of
@@ -118,12 +128,14 @@ class Plant:
         seed: The seed it was drawn from.
         friction_physics: ``"lugre"`` or ``"dry"``.
         config: The twin configuration (use with the *nominal* description).
+        start: Where the arm starts [rad] (None: the home pose; ``DigitalTwin(..., q0=)``).
     """
 
     name: str
     seed: int
     friction_physics: str
     config: TwinConfig
+    start: np.ndarray | None = None
 
 
 def sample_plant(
@@ -182,7 +194,20 @@ def sample_plant(
         seed=seed,
         enabling_device=r.enabling_device,
     )
-    return Plant(f"{friction} #{seed}", seed, friction, config)
+    start = _start_pose(robot, r.start_spread, [seed, FRICTION_PHYSICS.index(friction), 2])
+    return Plant(f"{friction} #{seed}", seed, friction, config, start)
+
+
+def _start_pose(robot: RobotDescription, spread: float, seed: list[int]) -> np.ndarray | None:
+    """The home pose moved up to ``spread`` [rad] per joint, inside the limits.
+
+    :data:`START_MARGIN` inside each; None for no spread.
+    """
+    if spread == 0.0:
+        return None
+    offset = np.random.default_rng(seed).uniform(-spread, spread, robot.n_joints)
+    low, high = robot.q_min + START_MARGIN, robot.q_max - START_MARGIN
+    return np.clip(robot.home() + offset, np.minimum(low, high), np.maximum(low, high))
 
 
 def _lugre(
