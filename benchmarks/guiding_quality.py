@@ -30,7 +30,8 @@ Usage:
         [--robot FILE --tip LINK --drive-data FILE]  (an arm of your own: a URDF or TOML)
         [--hands soft,firm]           (other hands of guiding.HANDS: 100 and 1000 N/m;
                                        grasping,stiff-grasping also hold the tool's
-                                       orientation, 2 and 10 Nm/rad)
+                                       orientation, 2 and 10 Nm/rad;
+                                       trembling,stiff-trembling: 0.3 mm tremor at 9 Hz)
         [--uncalibrated]              (both modes without the start-up calibration)
         [--plants FIELD=VALUE ...]    (another family: twin.plants.PlantRanges fields, e.g.
                                        position_amplitude=0.25 friction_scale=0.7,1.3)

@@ -47,6 +47,12 @@ def unchecked_push(monkeypatch) -> None:
     monkeypatch.setattr(CalibrationRun, "check_push", lambda run, estimate: None)
 
 
+def unchecked_drift(monkeypatch) -> None:
+    """Every calibration's readings may move between its cycles, as before ``max_drift``."""
+    monkeypatch.setattr(CalibrationRun, "drift",
+                        lambda run, t, plus, minus: np.full(plus.shape[1], np.nan))  # fmt: skip
+
+
 def constant_gravity_bias(monkeypatch) -> None:
     """Every calibration's gravity error stays a constant, as before ``gravity_share``."""
     from leadthrough.control import lead_through

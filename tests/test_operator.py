@@ -154,6 +154,30 @@ def test_hand_from_parameters_matches_keywords_and_documented_defaults():
     assert default.rotational_stiffness == 0.0
 
 
+def test_a_trembling_hand_adds_its_tremor_through_its_own_impedance():
+    """At rest on its path, the tremor's force is a (K sin + D ω cos) per axis, 120° apart.
+
+    Its amplitude is ``a √(K² + (D ω)²)`` on each axis; without a tremor (the default) the
+    force is zero there, and a tremor or a frequency out of range is a one-line error.
+    """
+    still = MinimumJerk([0.4, 0.0, 0.3], [0.4, 0.0, 0.3], 1.0)
+    k, d, a, f = 300.0, 30.0, 3e-4, 9.0
+    hand = Hand(still, stiffness=k, damping=d, tremor=a, tremor_frequency=f)
+    t = np.linspace(0.0, 1.0 / f, 721)
+    forces = np.array([hand.wrench(ti, pose([0.4, 0.0, 0.3]), np.zeros(6))[:3] for ti in t])
+    omega = 2.0 * np.pi * f
+    np.testing.assert_allclose(np.abs(forces).max(axis=0), a * np.hypot(k, d * omega), rtol=1e-4)
+    phases = np.array([0.0, 2.0, 4.0]) * np.pi / 3.0
+    expected = a * (k * np.sin(omega * t[:, None] + phases)
+                    + d * omega * np.cos(omega * t[:, None] + phases))  # fmt: skip
+    np.testing.assert_allclose(forces, expected, atol=1e-12)
+    calm = Hand(still, stiffness=k, damping=d)
+    np.testing.assert_array_equal(calm.wrench(0.3, pose([0.4, 0.0, 0.3]), np.zeros(6)), 0.0)
+    for field, value in (("tremor", -1e-4), ("tremor_frequency", 0.0)):
+        with pytest.raises(ValueError, match=field):
+            HandParameters(**{field: value})
+
+
 def test_joint_hand_acts_on_its_joint_only_as_a_spring_damper():
     """The joint hand gives K·(q_ref − q) + D·(q̇_ref − q̇) on one joint and zero on the others."""
     rng = np.random.default_rng(RNG_SEED)

@@ -54,7 +54,10 @@ BoolArray = NDArray[np.bool_]
 #: ≈ 1.8 √stiffness). These four hold a point: they leave the tool's orientation free. The
 #: two grasping hands also hold the orientation the tool had at the grab, as a hand that
 #: grips a handle does: a forearm and wrist about 2 Nm/rad relaxed (Formica et al. 2012,
-#: the passive wrist 1–2 Nm/rad) and 10 Nm/rad with the grip and the arm stiffened.
+#: the passive wrist 1–2 Nm/rad) and 10 Nm/rad with the grip and the arm stiffened. The
+#: two trembling hands are the benchmark's with a physiological tremor of 0.3 mm at 9 Hz
+#: on each axis (:class:`HandParameters`): the tool's shaking then has a source outside the
+#: controller, and the ratio says how much more of it active mode lets through.
 HANDS = {
     "relaxed": HandParameters(300.0, 30.0),
     "stiff": HandParameters(3000.0, 100.0),
@@ -64,6 +67,8 @@ HANDS = {
     "stiff-grasping": HandParameters(
         3000.0, 100.0, rotational_stiffness=10.0, rotational_damping=0.2
     ),
+    "trembling": HandParameters(300.0, 30.0, tremor=0.0003),
+    "stiff-trembling": HandParameters(3000.0, 100.0, tremor=0.0003),
 }
 #: The hands of the benchmark's cases (the circle takes the first).
 BENCHMARK_HANDS = ("relaxed", "stiff")

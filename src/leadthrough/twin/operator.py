@@ -81,7 +81,9 @@ class HandParameters:
     (Mussa-Ivaldi, Hogan & Bizzi 1985, J. Neurosci. 5(10)), endpoint viscosity is of the
     order of 10–20 N s/m (Tsuji et al. 1995, Biol. Cybern. 72), and 60 N is a pull a
     person sustains comfortably. The rotational impedance is off by default (force only);
-    a weak wrist is a few Nm/rad.
+    a weak wrist is a few Nm/rad. A hand that holds a posture trembles: physiological tremor
+    is 8–12 Hz, a few tenths of a millimetre at the hand (Elble & Koller 1990, *Tremor*);
+    off by default.
 
     Attributes:
         stiffness: Translational stiffness [N/m], >= 0.
@@ -90,6 +92,9 @@ class HandParameters:
         rotational_stiffness: Rotational stiffness [Nm/rad], >= 0.
         rotational_damping: Rotational damping [Nm s/rad], >= 0.
         max_moment: Largest moment norm the hand applies [Nm], > 0.
+        tremor: Amplitude of the tremor of the hand's reference, per world axis [m], >= 0:
+            ``a sin(2π f t + φ_k)`` with phases 0, 120° and 240° on x, y and z.
+        tremor_frequency: Its frequency ``f`` [Hz], > 0.
     """
 
     stiffness: float = 300.0
@@ -98,11 +103,14 @@ class HandParameters:
     rotational_stiffness: float = 0.0
     rotational_damping: float = 0.0
     max_moment: float = 5.0
+    tremor: float = 0.0
+    tremor_frequency: float = 9.0
 
     def __post_init__(self) -> None:
-        for name in ("stiffness", "damping", "rotational_stiffness", "rotational_damping"):
+        names = ("stiffness", "damping", "rotational_stiffness", "rotational_damping", "tremor")
+        for name in names:
             object.__setattr__(self, name, check.real(name, getattr(self, name), minimum=0.0))
-        for name in ("max_force", "max_moment"):
+        for name in ("max_force", "max_moment", "tremor_frequency"):
             value = check.real(name, getattr(self, name), minimum=0.0, strict=True)
             object.__setattr__(self, name, value)
 
@@ -131,12 +139,14 @@ class Hand(Operator):
         rotational_stiffness: float = HandParameters.rotational_stiffness,
         rotational_damping: float = HandParameters.rotational_damping,
         max_moment: float = HandParameters.max_moment,
+        tremor: float = HandParameters.tremor,
+        tremor_frequency: float = HandParameters.tremor_frequency,
     ) -> None:
         check.path_like("path", path)
         self.path = path
-        self.parameters = HandParameters(
-            stiffness, damping, max_force, rotational_stiffness, rotational_damping, max_moment
-        )
+        self.parameters = HandParameters(stiffness, damping, max_force, rotational_stiffness,
+                                         rotational_damping, max_moment, tremor,
+                                         tremor_frequency)  # fmt: skip
         self._held_orientation: FloatArray | None = None
 
     @classmethod
@@ -162,6 +172,8 @@ class Hand(Operator):
         p = self.parameters
         position, velocity = (self.path.reference(t) if isinstance(self.path, Path)
                               else (self.path.position(t), self.path.velocity(t)))  # fmt: skip
+        if p.tremor > 0.0:
+            position, velocity = _trembling(position, velocity, t, p)
         force = _impedance(
             error=position - pose[:3, 3],
             rate_error=velocity - twist[:3],
@@ -178,6 +190,19 @@ class Hand(Operator):
             limit=p.max_moment,
         )
         return np.concatenate([force, moment])
+
+
+def _trembling(
+    position: FloatArray, velocity: FloatArray, t: float, p: HandParameters
+) -> tuple[FloatArray, FloatArray]:
+    """The reference ``position`` [m] and ``velocity`` [m/s] with the hand's tremor added."""
+    omega = 2.0 * np.pi * p.tremor_frequency
+    phase = omega * t + _TREMOR_PHASES
+    return position + p.tremor * np.sin(phase), velocity + p.tremor * omega * np.cos(phase)
+
+
+#: Phases of the tremor on the world's x, y and z axes [rad].
+_TREMOR_PHASES = np.array([0.0, 2.0 * np.pi / 3.0, 4.0 * np.pi / 3.0])
 
 
 @dataclass(frozen=True, eq=False)
