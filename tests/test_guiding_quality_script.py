@@ -62,7 +62,8 @@ def test_other_hands_make_the_cases_and_an_unknown_one_is_a_one_line_error(capsy
         guiding_quality.main(["--hands", "soft,gentle"])
     error = capsys.readouterr().err.strip().splitlines()[-1]
     assert error.endswith(
-        "unknown hand(s) gentle: choose from relaxed, stiff, soft, firm, grasping, stiff-grasping"
+        "unknown hand(s) gentle: choose from relaxed, stiff, soft, firm, grasping, "
+        "stiff-grasping, trembling, stiff-trembling"
     )
 
 

@@ -258,7 +258,12 @@ def case_path(
 
 def _home_flange(robot: RobotDescription) -> FloatArray:
     """The flange's position at the robot's home pose [m, world]."""
-    return Dynamics(robot).pose(robot.home())[:3, 3]
+    return _flange_position(robot, robot.home())
+
+
+def _flange_position(robot: RobotDescription, q: FloatArray) -> FloatArray:
+    """The flange's position at the joint angles ``q`` [rad] (nominal model) [m, world]."""
+    return Dynamics(robot).pose(q)[:3, 3]
 
 
 def _robot_or_yumi(robot: RobotDescription | None) -> RobotDescription:
@@ -377,8 +382,9 @@ def _run(
     calibrating = getattr(recorder.controller, "calibration_time", CalibrationParameters().duration)
     grab = 0.0 if case.grab_at_once else float(calibrating)
     config = replace(plant.config, control_dt=recorder.dt or plant.config.control_dt)
-    if case.path == PRESS:  # a table under the tool (which points down at home)
-        config = replace(config, table=TableSurface.below_tool(_home_flange(robot), TABLE_GAP))
+    if case.path == PRESS:  # a table under the tool where it starts (it points down at home)
+        start = _flange_position(robot, robot.home() if plant.start is None else plant.start)
+        config = replace(config, table=TableSurface.below_tool(start, TABLE_GAP))
     twin = DigitalTwin(robot, config, q0=plant.start)
     observe_truth = getattr(recorder.controller, "observe_truth", None)
     if observe_truth is not None:  # an oracle (diagnosis): reads the twin's truth

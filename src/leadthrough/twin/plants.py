@@ -34,6 +34,7 @@ from leadthrough.twin.friction import TwinFrictionParameters, smallest_effective
 from leadthrough.twin.model_error import ModelError, perturbed_robot
 from leadthrough.twin.sensors import SensorModel
 from leadthrough.twin.simulator import TwinConfig
+from leadthrough.validation import FloatArray
 
 FRICTION_PHYSICS = ("lugre", "dry")
 
@@ -60,9 +61,10 @@ class PlantRanges:
         torque_sensor: Whether the drives report the torque they apply
             (``SensorModel.torque_sensor``; not drawn).
         start_spread: How far from the home pose each joint may start [rad]: uniform
-            within ±spread, kept :data:`START_MARGIN` inside the joint's limits; 0 starts
-            every plant at home. Drawn from a stream of its own, so the plant is otherwise
-            the same.
+            within ±spread, kept :data:`START_MARGIN` inside the joint's limits (further
+            from home where home itself is nearer a limit); 0 starts every plant at home.
+            Drawn from a stream of its own, so the plant is otherwise the same; the stream
+            counts the physics, so dry #n and lugre #n start at different poses.
     """
 
     mass_error: float = 0.05
@@ -135,7 +137,7 @@ class Plant:
     seed: int
     friction_physics: str
     config: TwinConfig
-    start: np.ndarray | None = None
+    start: FloatArray | None = None
 
 
 def sample_plant(
@@ -198,7 +200,7 @@ def sample_plant(
     return Plant(f"{friction} #{seed}", seed, friction, config, start)
 
 
-def _start_pose(robot: RobotDescription, spread: float, seed: list[int]) -> np.ndarray | None:
+def _start_pose(robot: RobotDescription, spread: float, seed: list[int]) -> FloatArray | None:
     """The home pose moved up to ``spread`` [rad] per joint, inside the limits.
 
     :data:`START_MARGIN` inside each; None for no spread.
