@@ -228,12 +228,13 @@ class CalibrationParameters:
             hand that grabs as the run starts loads the arm below the push bound, and its
             mean push was read as a gravity error that drove the arm once the hand let go
             (the relaxed circles of seeds 9–11 of ``benchmarks/guiding_quality.py``, biases
-            0.3–0.8 Nm off, released arms running 1.5 rad). On the YuMi's plants of seeds
-            1–32 and the Panda's, UR5's and UR10e's of seeds 1–8 with nobody touching, the
-            readings move at most 0.07 of the level alone; with unknown payloads (the YuMi
-            0.5–2.3 kg, the UR10e 2–5 kg, the Panda 1–3 kg) at most 0.12 of the level and
-            gravity error; a relaxed hand grabbing at once (the YuMi's seeds 1, 2, 9 and
-            10, both physics, four paths), at least 0.38, but for a hand that held joint
+            0.3–0.8 Nm off, released arms running 1.5 rad). Measured by
+            ``benchmarks/calibration_drift.py``: with nobody touching (the YuMi's plants of
+            seeds 1–8 at 250 Hz, 125 Hz and 1 kHz, the Panda's, UR5's and UR10e's), the
+            readings move at most 0.068 of what a joint carries; with unknown payloads
+            (the YuMi 0.5–2.3 kg, the UR10e 2–5 kg, the Panda 1–3 kg) at most 0.12; a
+            relaxed hand grabbing at once (the YuMi's seeds 1, 2, 9, 10 and 11, both
+            physics, four paths), at least 0.38, but for a hand that held joint
             2 still in one direction of the last cycle (dry #11 relaxed upwards: 0.16,
             accepted). A joint is checked where it slid at pace both ways in both the first
             and the last cycle (:meth:`CalibrationRun.drift`), 2–7 of the YuMi's 7; a
@@ -643,6 +644,9 @@ class CalibrationRun:
         self.disturbance: str | None = None  # why the calibration must stop, if it must
         # the joint that ran faster than max_speed or too far off the motion, if one
         self.runaway: int | None = None
+        #: per joint, how far its readings moved over what it carries (``max_drift``; 0
+        #: where not checked), once :meth:`judge` got that far [–]
+        self.drift_ratio: FloatArray | None = None
         self._balance = MomentumBalance(dynamics, friction)  # what the readings come from
         #: the largest external torque the model's errors may read untouched [Nm]
         self.push_bound = self._plausible_push(gravity_uncertainty)
@@ -848,6 +852,7 @@ class CalibrationRun:
         drift = np.where(slid & (level > 0.0), self.drift(t, plus, minus), np.nan)
         moved = np.divide(np.abs(drift), carried, out=np.zeros_like(carried),
                           where=np.isfinite(drift))  # fmt: skip
+        self.drift_ratio = moved
         if np.max(moved) > p.max_drift:
             joint = int(np.argmax(moved))
             return self._refused(f"joint {joint + 1}'s readings moved {drift[joint]:+.2f} Nm "
