@@ -18,7 +18,7 @@ bound stopped early, before any reading) and whether the calibration was accepte
 the largest and smallest ratio of each kind, and draws them against the limit. Usage::
 
     python benchmarks/calibration_drift.py [--seeds 8] [--hand-seeds 1,2,9,10,11]
-        [--out docs/figures/calibration_drift.png]
+        [--out docs/bench/calibration_drift.png]
 """
 
 from __future__ import annotations
@@ -160,7 +160,7 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--seeds", type=int, default=8, help="untouched plants 1..N per robot")
     parser.add_argument("--hand-seeds", default="1,2,9,10,11", help="YuMi plants a hand grabs")
-    parser.add_argument("--out", type=Path, default=Path("build/calibration_drift.png"))
+    parser.add_argument("--out", type=Path, default=Path("docs/bench/calibration_drift.png"))
     args = parser.parse_args(argv)
     hand_seeds = [int(x) for x in args.hand_seeds.split(",")]
     kinds = (("nobody touching", untouched(args.seeds)), ("unknown payload", payloads()),
