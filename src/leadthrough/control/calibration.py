@@ -840,15 +840,15 @@ class CalibrationRun:
         level = self.friction.coulomb_level(self.pose)
         e_plus = _column_medians(np.where(slid, plus, 0.0))
         e_minus = _column_medians(np.where(slid, minus, 0.0))  # a stuck joint: no error
+        read = 0.5 * (e_plus + e_minus)  # what does not change sign with the motion
         # the readings' gravity error, plus what the measurement adds that the arm never felt
-        gravity_error = 0.5 * (e_plus + e_minus) + (0.0 if offset is None else offset)
-        gravity_error = np.where(slid, gravity_error, 0.0)
+        gravity_error = np.where(slid, read + (0.0 if offset is None else offset), 0.0)
         coulomb_error = np.where(measured, 0.5 * (e_plus - e_minus), 0.0)
         # a joint modelled without friction keeps it: no level to rescale
         scale = np.where(level > 0.0, 1.0 - coulomb_error / np.where(level > 0.0, level, 1.0), 1.0)
         # a push that changed while the run read it: a hand (max_drift); a joint modelled
         # without friction has no level to hold its readings' change against
-        carried = level + np.abs(0.5 * (e_plus + e_minus))
+        carried = level + np.abs(read)
         drift = np.where(slid & (level > 0.0), self.drift(t, plus, minus), np.nan)
         moved = np.divide(np.abs(drift), carried, out=np.zeros_like(carried),
                           where=np.isfinite(drift))  # fmt: skip
@@ -895,9 +895,9 @@ class CalibrationRun:
             minus: The same in the negative direction.
         """
         p = self.parameters
-        cycle = np.floor((np.asarray(t) - p.settle_time) * p.frequency)[:, None]
         if p.cycles < 2:
             return np.full(plus.shape[1], np.nan)
+        cycle = np.floor((np.asarray(t) - p.settle_time) * p.frequency)[:, None]
         change = [_column_medians(np.where(cycle == p.cycles - 1, side, np.nan))
                   - _column_medians(np.where(cycle == 0, side, np.nan))
                   for side in (plus, minus)]  # fmt: skip

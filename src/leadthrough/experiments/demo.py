@@ -27,7 +27,6 @@ from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.runtime.recording import SessionRecorder, read_recording
 from leadthrough.twin.operator import Hand
-from leadthrough.twin.paths import Path as HandPath
 from leadthrough.twin.presets import REALISTIC_TWIN
 from leadthrough.twin.runner import SimulationResult, simulate
 from leadthrough.twin.session_operator import Action, ScriptedOperator, TeachingSession
@@ -149,8 +148,8 @@ def intended_velocity(run: SimulationResult, actions: list[Action]) -> FloatArra
     turns a joint, not a hand on the tool, has no path: zero).
     """
     intended = np.zeros_like(run.flange_position)
-    for during, path, start in _hand_paths(run, actions):
-        intended[during] = path.velocity(run.t[during] - start)
+    for during, hand, start in hands_on_tool(run, actions):
+        intended[during] = hand.path.velocity(run.t[during] - start)
     return intended
 
 
@@ -161,15 +160,19 @@ def intended_position(run: SimulationResult, actions: list[Action]) -> FloatArra
     taught path (``run.flange_position``) shows how the arm followed.
     """
     intended = np.full_like(run.flange_position, np.nan)
-    for during, path, start in _hand_paths(run, actions):
-        intended[during] = path.position(run.t[during] - start)
+    for during, hand, start in hands_on_tool(run, actions):
+        intended[during] = hand.path.position(run.t[during] - start)
     return intended
 
 
-def _hand_paths(
+def hands_on_tool(
     run: SimulationResult, actions: list[Action]
-) -> Iterator[tuple[NDArray[np.intp], HandPath, float]]:
-    """Each action's samples, its hand's path and start [s]: hands on the tool only."""
+) -> Iterator[tuple[NDArray[np.intp], Hand, float]]:
+    """Each action's samples, its hand and start [s]: hands on the tool only.
+
+    Each hand is rebuilt from where the flange was when its action began (an action that
+    turns a joint is not a hand on the tool).
+    """
     for action in actions:
         during = np.flatnonzero((run.t >= action.start) & (run.t < action.stop))
         if during.size == 0:
@@ -177,7 +180,7 @@ def _hand_paths(
         first = during[0]
         operator = action.make(run.flange_position[first], run.q_true[first])
         if isinstance(operator, Hand):  # a hand on the tool (not one turning a joint)
-            yield during, operator.path, action.start
+            yield during, operator, action.start
 
 
 @dataclass(frozen=True)

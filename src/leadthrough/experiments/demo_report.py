@@ -10,6 +10,7 @@ from leadthrough.experiments.demo import (
     DemoResult,
     figures_by_action,
     hand_force_rms,
+    hands_on_tool,
     intended_position,
     path_smoothness,
     teaching_actions,
@@ -17,7 +18,7 @@ from leadthrough.experiments.demo import (
 from leadthrough.model.description import RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.plots import pyplot
-from leadthrough.twin.operator import Hand, HandParameters
+from leadthrough.twin.operator import HandParameters
 from leadthrough.twin.session_operator import TeachingSession
 
 
@@ -125,11 +126,8 @@ def _picture(result: DemoResult, robot: RobotDescription, path: Path) -> str:
 
 def _first_hand(result: DemoResult, robot: RobotDescription) -> HandParameters:
     """The impedance of the session's first hand on the tool."""
-    sim = result.taught
-    for action in teaching_actions(robot):
-        operator = action.make(sim.flange_position[0], sim.q_true[0])
-        if isinstance(operator, Hand):
-            return operator.parameters
+    for _, hand, _ in hands_on_tool(result.taught, teaching_actions(robot)):
+        return hand.parameters
     raise ValueError("the teaching session has no hand on the tool")
 
 

@@ -371,8 +371,8 @@ def _run(
 
     The hand grabs the flange where it is once the calibration is over (the calibration
     may have moved the arm a little), or at once (:attr:`Case.grab_at_once`): its path
-    starts there. The plant runs at the
-    controller's period (``dt``, 4 ms when it has none); its delay is in periods.
+    starts there. The plant runs at the controller's period (``dt``, 4 ms when it has
+    none); its delay is in periods.
     """
     plant = sample_plant(robot, case.seed, case.physics, case.ranges)
     if isinstance(factory, IdentifiedFirst):
