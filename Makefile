@@ -43,6 +43,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/replay_quality.py --dt 0.008
 	$(BIN)/python benchmarks/calibration_accuracy.py
 	$(BIN)/python benchmarks/calibration_drift.py
+	$(BIN)/python benchmarks/hand_impedance.py
 	$(BIN)/python benchmarks/real_identification.py
 	$(BIN)/python benchmarks/payload_twin.py
 	$(BIN)/python benchmarks/real_observer.py
