@@ -240,6 +240,29 @@ def test_benchmark_seeds_and_uncalibrated_factory(robot):
         assert not controller.calibrating and controller.mode == mode
 
 
+def test_coarser_encoders_report_coarser_angles(robot):
+    """``encoder_counts``: the twin's angles fall on the joint quantum 2π / (counts · gear).
+
+    The plant is otherwise the one the default count draws; the measured angle is the true
+    one rounded to the quantum, so it errs by at most half of it, and by more than the
+    default's quantum once the encoder is 64× coarser.
+    """
+    fine = sample_plant(robot, 3, "dry")
+    coarse = sample_plant(robot, 3, "dry", PlantRanges(encoder_counts=256))
+    assert coarse.config.sensors.encoder_counts == 256
+    same_count = dataclasses.replace(coarse.config.sensors, encoder_counts=2**14)
+    assert same_count == fine.config.sensors
+    q0 = robot.home() + 0.0123
+    errors = {}
+    for name, plant in (("fine", fine), ("coarse", coarse)):
+        twin = DigitalTwin(robot, plant.config, q0=q0)
+        quantum = plant.config.sensors.quantum(robot)
+        error = np.abs(twin.read_state().q - twin.truth.q)
+        assert np.all(error <= 0.5 * quantum + 1e-12)
+        errors[name] = error
+    assert np.max(errors["coarse"]) > np.max(fine.config.sensors.quantum(robot))
+
+
 @pytest.mark.parametrize("field, value, says", [
     ("position_amplitude", 1.0, "position_amplitude: must be in [0, 1), got 1.0"),
     ("friction_scale", (1.3, 0.7), "friction_scale: must be > 0, LOW ≤ HIGH, got (1.3, 0.7)"),
@@ -247,6 +270,7 @@ def test_benchmark_seeds_and_uncalibrated_factory(robot):
     ("delay_periods", (1, 2.5), "delay_periods: must be whole periods ≥ 0"),
     ("torque_offset", (-0.1, float("nan")), "torque_offset: must be finite"),
     ("start_spread", -0.1, "start_spread: must be ≥ 0, got -0.1"),
+    ("encoder_counts", 0, "encoder_counts: must be a whole number ≥ 1, got 0"),
 ])  # fmt: skip
 def test_a_plant_range_outside_what_it_allows_is_a_one_line_error(field, value, says):
     """A family is checked where it is made, not when a plant of it is drawn mid-run."""

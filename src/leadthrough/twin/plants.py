@@ -65,6 +65,9 @@ class PlantRanges:
             from home where home itself is nearer a limit); 0 starts every plant at home.
             Drawn from a stream of its own, so the plant is otherwise the same; the stream
             counts the physics, so dry #n and lugre #n start at different poses.
+        encoder_counts: Counts per motor revolution of every joint's encoder
+            (``SensorModel.encoder_counts``; not drawn): fewer is a coarser angle, and a
+            noisier velocity differenced from it.
     """
 
     mass_error: float = 0.05
@@ -82,6 +85,7 @@ class PlantRanges:
     enabling_device: bool = False
     torque_sensor: bool = True
     start_spread: float = 0.0
+    encoder_counts: int = SensorModel.encoder_counts
 
     def __post_init__(self) -> None:
         for name, (allowed, text) in _RANGE_RULES.items():
@@ -107,6 +111,7 @@ _RANGE_RULES: dict[str, tuple[Callable[[float], bool], str]] = {
     "velocity_cutoff": (lambda x: x > 0.0, "> 0"),
     "position_amplitude": (lambda x: 0.0 <= x < 1.0, "in [0, 1)"),
     "start_spread": (lambda x: x >= 0.0, "≥ 0"),
+    "encoder_counts": (lambda x: x >= 1 and float(x).is_integer(), "a whole number ≥ 1"),
 }
 
 #: How far inside its limits a joint starts, at least [rad]: two of the lead-through
@@ -185,6 +190,7 @@ def sample_plant(
         torque_offset=tuple(float(x) for x in rng.uniform(*r.torque_offset, n)),
         velocity_cutoff=float(rng.uniform(*r.velocity_cutoff)),
         torque_sensor=r.torque_sensor,
+        encoder_counts=r.encoder_counts,
     )
     low, high = r.delay_periods
     config = TwinConfig(
