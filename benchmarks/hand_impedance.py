@@ -96,7 +96,7 @@ class RecordedWrench(Operator):
 def run(
     robot: RobotDescription, plant: Plant, operator: Operator | None, probe: tuple[float, float]
 ) -> tuple[SimulationResult, FloatArray]:
-    """A passive controller with the probe on ``plant``; ``operator`` None: the case's hand."""
+    """A passive controller with the probe on ``plant``, ``operator`` on the arm (None: nobody)."""
     controller = ProbedController(lt.LeadThrough(robot, mode="passive", dt=0.004), probe)
     twin = DigitalTwin(robot, plant.config, q0=plant.start)
     twin.operator = operator or Operator()
