@@ -28,6 +28,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -94,23 +95,31 @@ class RecordedWrench(Operator):
 
 
 def run(
-    robot: RobotDescription, plant: Plant, operator: Operator | None, probe: tuple[float, float]
+    robot: RobotDescription,
+    plant: Plant,
+    operator: Callable[[DigitalTwin], Operator],
+    probe: tuple[float, float],
 ) -> tuple[SimulationResult, FloatArray]:
-    """A passive controller with the probe on ``plant``, ``operator`` on the arm (None: nobody)."""
+    """A passive controller with the probe on ``plant``; ``operator(twin)`` on the arm."""
     controller = ProbedController(lt.LeadThrough(robot, mode="passive", dt=0.004), probe)
     twin = DigitalTwin(robot, plant.config, q0=plant.start)
-    twin.operator = operator or Operator()
+    twin.operator = operator(twin)
     sim = simulate(twin, controller, RELEASE + 0.5, progress=False)
     return sim, np.array(controller.estimates)
 
 
-def hand_run(
-    robot: RobotDescription, plant: Plant, hand: str, line: str, probe: tuple[float, float]
-) -> tuple[SimulationResult, FloatArray]:
-    """The hand pulls the flange along ``line`` from where it starts, and lets go at RELEASE."""
-    start = DigitalTwin(robot, plant.config, q0=plant.start).truth.flange_pose[:3, 3].copy()
-    grip = Hand.from_parameters(case_path(robot, line, start), HANDS[hand])
-    return run(robot, plant, During(grip, 0.0, RELEASE), probe)
+def hand(name: str, line: str) -> Callable[[DigitalTwin], Operator]:
+    """The hand ``name`` on the twin: it pulls the flange along ``line`` from where it starts.
+
+    It lets go at :data:`RELEASE`.
+    """
+
+    def on(twin: DigitalTwin) -> Operator:
+        start = twin.truth.flange_pose[:3, 3].copy()
+        grip = Hand.from_parameters(case_path(twin.robot, line, start), HANDS[name])
+        return During(grip, 0.0, RELEASE)
+
+    return on
 
 
 def without_band(wrench: FloatArray, frequency: float, dt: float) -> FloatArray:
@@ -120,11 +129,11 @@ def without_band(wrench: FloatArray, frequency: float, dt: float) -> FloatArray:
     return filtfilt(b, a, wrench, axis=0)
 
 
-def momentum_residual(dynamics: Dynamics, sim: SimulationResult, shift: int) -> FloatArray:
-    """``ṗ − Cᵀq̇ + G − τ_m`` [Nm] from the measured angles and torques, ``τ_m`` ``shift`` later.
+def rigid_body_torque(dynamics: Dynamics, sim: SimulationResult) -> FloatArray:
+    """``ṗ − Cᵀq̇ + G`` [Nm] from the measured angles, ``q̇`` and ``ṗ`` by central differences.
 
-    The external torque without a filter and without friction (smooth at the probe's
-    frequency on a sliding joint); ``q̇`` and ``ṗ`` by central differences.
+    Less the motor torque, the external torque without a filter and without friction
+    (smooth at the probe's frequency on a sliding joint): :func:`momentum_residual`.
     """
     dt = float(sim.t[1] - sim.t[0])
     qd = np.gradient(sim.q, dt, axis=0)
@@ -132,8 +141,12 @@ def momentum_residual(dynamics: Dynamics, sim: SimulationResult, shift: int) -> 
     coriolis = np.array([dynamics.coriolis_transpose_times_velocity(q, v)
                          for q, v in zip(sim.q, qd, strict=True)])  # fmt: skip
     gravity = np.array([dynamics.gravity(q) for q in sim.q])
-    measured = np.roll(sim.tau_measured, -shift, axis=0)
-    return np.gradient(momentum, dt, axis=0) - coriolis + gravity - measured
+    return np.gradient(momentum, dt, axis=0) - coriolis + gravity
+
+
+def momentum_residual(rigid_body: FloatArray, sim: SimulationResult, shift: int) -> FloatArray:
+    """``ṗ − Cᵀq̇ + G − τ_m`` [Nm], each measured torque taken ``shift`` samples later."""
+    return rigid_body - np.roll(sim.tau_measured, -shift, axis=0)
 
 
 def damping(
@@ -196,20 +209,21 @@ def read_case(
     periods: int,
 ) -> list[Reading]:  # fmt: skip
     """The readings of one case and probe: the hand, then its forces as a source."""
-    physics, seed, hand, line = case
+    physics, seed, hand_name, line = case
     plant = sample_plant(robot, seed, physics)
     plant = replace(plant, config=replace(plant.config, control_dt=0.004))
     dynamics = Dynamics(robot)
-    held, held_estimate = hand_run(robot, plant, hand, line, probe)
+    held, held_estimate = run(robot, plant, hand(hand_name, line), probe)
     dt = float(held.t[1] - held.t[0])
     source = RecordedWrench(held.t - held.t[0], without_band(held.operator_wrench, probe[0], dt))
-    pushed, pushed_estimate = run(robot, plant, source, probe)
+    pushed, pushed_estimate = run(robot, plant, lambda twin: source, probe)
     shift = plant.config.delay_periods - 1  # the measured torque at k acts from k − shift
-    label = f"{physics}#{seed} {hand} {line}"
+    label = f"{physics}#{seed} {hand_name} {line}"
     readings = []
     for name, sim, estimate in (("hand", held, held_estimate), ("force", pushed, pushed_estimate)):
-        signals = (sim.tau_ext, estimate, momentum_residual(dynamics, sim, shift),
-                   momentum_residual(dynamics, sim, shift + 1))  # fmt: skip
+        rigid_body = rigid_body_torque(dynamics, sim)
+        signals = (sim.tau_ext, estimate, momentum_residual(rigid_body, sim, shift),
+                   momentum_residual(rigid_body, sim, shift + 1))  # fmt: skip
         for signal, torque in zip(SIGNALS, signals, strict=True):
             b, amplitude = damping(dynamics, sim, torque, probe[0], periods).T
             low, median, high = np.percentile(b, [0, 50, 100]) if b.size else (np.nan,) * 3

@@ -250,7 +250,9 @@ def test_coarser_encoders_report_coarser_angles(robot):
     fine = sample_plant(robot, 3, "dry")
     coarse = sample_plant(robot, 3, "dry", PlantRanges(encoder_counts=256))
     assert coarse.config.sensors.encoder_counts == 256
-    same_count = dataclasses.replace(coarse.config.sensors, encoder_counts=2**14)
+    same_count = dataclasses.replace(
+        coarse.config.sensors, encoder_counts=SensorModel.encoder_counts
+    )
     assert same_count == fine.config.sensors
     q0 = robot.home() + 0.0123
     errors = {}
