@@ -174,6 +174,32 @@ def test_a_joint_the_calibration_did_not_measure_keeps_all_of_its_gravity_uncert
     np.testing.assert_allclose(controller.joint_std, expected, rtol=1e-12)
 
 
+def test_the_calibrations_reading_of_gravity_is_as_uncertain_as_its_readings():
+    """A measured joint's gravity is known to the readings' scatter, not exactly.
+
+    The gravity error ``(e₊ + e₋) / 2`` and the level's ``(e₊ − e₋) / 2`` come from the same
+    readings, so a calibration whose readings scatter by ``coulomb_spread`` leaves the
+    gravity it measured that far off: at its pose the measured joints' std is the friction
+    model's and that spread together; joint 3, not measured, keeps all of its G uncertain
+    (its spread is not counted twice). Encoders of 0.65 mrad at a YuMi joint scatter the
+    readings by 0.05–0.2 Nm, and their gravity errors read 0.01–0.1 Nm off (docs).
+    """
+    robot = lt.robots.yumi()
+    controller = lt.LeadThrough(robot, mode="active", dt=0.004, calibrate=True)
+    q, n = robot.home(), robot.n_joints
+    measured = np.arange(n) != 2
+    zeros, spread = np.zeros(n), np.linspace(0.02, 0.14, n)
+    calibration = Calibration(q, zeros, zeros, 0.0, zeros, np.ones(n), True, "", measured,
+                              coulomb_spread=np.where(measured, spread, 0.0))  # fmt: skip
+    controller._finish_calibration(calibration, 0.0)
+    gravity = controller.dynamics.gravity(q)
+    controller.step(q, np.zeros(n), gravity)
+    friction = np.hypot(controller.observer.error_std, ripple_std(controller, gravity))
+    unknown = controller.parameters.gravity_std * gravity
+    expected = np.where(measured, np.hypot(friction, spread), np.hypot(friction, unknown))
+    np.testing.assert_allclose(controller.joint_std, expected, rtol=1e-12)
+
+
 def ripple_std(controller, tau_measured):
     """The std of the drives' ripple on the motor torque the controller was given [Nm]."""
     applied = tau_measured - controller.torque_offset

@@ -225,7 +225,10 @@ class LeadThrough:
         the gravity model's, ``parameters.gravity_std · |G(q) − G_cal|``
         (G_cal the gravity the calibration measured at its pose on the joints it
         measured, 0 elsewhere and without one: the error the Coulomb compensation's
-        ceiling allows for). ``observer.std`` is the filter's own covariance.
+        ceiling allows for), with the calibration's own reading of it on the joints it
+        measured: ``Calibration.coulomb_spread``, the readings' scatter, which the gravity
+        error ``(e₊ + e₋) / 2`` carries as the level's ``(e₊ − e₋) / 2`` does.
+        ``observer.std`` is the filter's own covariance.
         """
         friction = np.hypot(self.observer.error_std, self._ripple_std)
         model = self.model
@@ -234,7 +237,8 @@ class LeadThrough:
         reference = self._gravity_reference
         if reference is None:
             reference = self._no_gravity_reference
-        return _with_gravity_error(friction, model.gravity, reference, self._gravity_std)
+        return _with_gravity_error(friction, model.gravity, reference, self._gravity_std,
+                                   self._gravity_reading_std)  # fmt: skip
 
     @property
     def tool_wrench(self) -> ToolWrench:
@@ -365,6 +369,8 @@ class LeadThrough:
         #: torque [Nm] (None: not read)
         self._torque_offset: FloatArray | None = None
         self._gravity_reference: FloatArray | None = None  # G where it was measured [Nm]
+        # how far the calibration's reading of the gravity error may be off, per joint [Nm]
+        self._gravity_reading_std = np.zeros(n)
         #: How far the friction levels may be off at any pose: those the calibration read,
         #: their readings' scatter where they were read, growing with the travel from
         #: there; an identified model's, its own error over the stroke it was fitted on,
@@ -613,6 +619,10 @@ class LeadThrough:
         # elsewhere)
         measured_gravity = gravity - bias
         self._gravity_reference = np.where(known, measured_gravity, 0.0)
+        # the gravity error is read from the same readings as the level, (e₊ + e₋) / 2
+        # against (e₊ − e₋) / 2: as far off as the level's reading is
+        if calibration.coulomb_spread is not None:
+            self._gravity_reading_std = np.where(known, calibration.coulomb_spread, 0.0)
         self.law.model_error.calibrate(np.zeros(self.robot.n_joints), self._gravity_reference)
 
     def _follow_level_error(self, q: FloatArray) -> None:
@@ -733,8 +743,12 @@ class LeadThrough:
 
 
 @kernel
-def _with_gravity_error(friction, gravity, reference, gravity_std):
-    """``√(friction² + (gravity_std · |G − G_cal|)²)`` per joint, in place [Nm] (joint_std)."""
+def _with_gravity_error(friction, gravity, reference, gravity_std, reading):
+    """``√(friction² + (gravity_std · |G − G_cal|)² + reading²)`` per joint, in place [Nm].
+
+    ``reading``: how far the calibration's reading of G_cal may be off [Nm] (joint_std).
+    """
     for i in range(friction.shape[0]):
-        friction[i] = math.hypot(friction[i], gravity_std * abs(gravity[i] - reference[i]))
+        model = math.hypot(gravity_std * abs(gravity[i] - reference[i]), reading[i])
+        friction[i] = math.hypot(friction[i], model)
     return friction
