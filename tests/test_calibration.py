@@ -352,12 +352,12 @@ def test_one_encoder_too_coarse_for_the_pace_refuses_the_calibration(yumi):
         for sample, angles, torque in zip(t, np.round(q / quantum) * quantum, tau, strict=True):
             run.record(start + sample, angles, torque)
         if not checked:
-            run.encoder_step[:] = np.inf
+            run._moves.clear()  # no count known
         return run, run.result()
 
     fine = np.full(yumi.n_joints, 1e-6)
     run, result = judged(fine)
-    assert result.accepted and np.all(run.encoder_step < 1e-4)  # the motion's, not a count
+    assert result.accepted and np.all(np.isinf(run.encoder_step))  # moves finer than a count
     np.testing.assert_allclose(result.gravity_error, 0.1, atol=1e-3)
     coarse = fine.copy()
     coarse[1] = 1e-3
@@ -368,6 +368,32 @@ def test_one_encoder_too_coarse_for_the_pace_refuses_the_calibration(yumi):
     others = np.arange(yumi.n_joints) != 1
     assert unchecked.accepted, unchecked.reason
     assert np.max(np.abs(unchecked.gravity_error[others] - 0.1)) > 5e-3
+
+
+def test_an_encoders_count_is_read_from_moves_that_are_whole_counts_of_it(yumi):
+    """A joint's count: its smallest move, where every move is a whole number of it.
+
+    Joint 1 sticks and jumps (0.43, 2.1, 3.7, 1.2 mrad a period, a fine encoder): its
+    moves are no count's multiples, so no count is read (inf), and a jump's first move is
+    not taken for a coarse encoder. Joint 2 moves by 0 or 1 of 1 mrad counts, joint 3 by
+    1–3 counts of 3.8 µrad, joint 4 once only (too few moves to tell), joint 5 never. Only
+    joint 2's count is more than the 0.8 mrad the motion moves in two periods.
+    """
+    dynamics = lt.Dynamics(yumi)
+    run = CalibrationRun(dynamics, FrictionModel.from_robot(yumi), yumi.home())
+    jump = np.cumsum([0, 0, 0, 0.43e-3, 2.1e-3, 3.7e-3, 1.2e-3, 0, 0, 0, 0, 0])
+    coarse = 1e-3 * np.array([0, 0, 1, 1, 1, 2, 2, 3, 3, 3, 4, 4])
+    fine = 2.0 * np.pi / 2**14 / 100 * np.array([0, 1, 3, 4, 6, 7, 9, 12, 13, 15, 16, 18])
+    once = np.where(np.arange(12) < 6, 0.0, 0.7e-3)
+    for k in range(12):
+        q = yumi.home() + np.array([jump[k], coarse[k], fine[k], once[k], 0, 0, 0])
+        run.record(0.004 * k, q, np.zeros(7))
+    step = run.encoder_step
+    assert np.isinf(step[0]) and step[1] == pytest.approx(1e-3)
+    assert step[2] == pytest.approx(2.0 * np.pi / 2**14 / 100, rel=1e-3)
+    assert np.all(np.isinf(step[3:]))
+    t = 0.004 * np.arange(12)
+    np.testing.assert_array_equal(run.unresolved(t), np.arange(7) == 1)
 
 
 def test_encoders_too_coarse_for_the_calibration_refuse_it_with_the_reason(yumi):
@@ -390,7 +416,7 @@ def test_encoders_too_coarse_for_the_calibration_refuse_it_with_the_reason(yumi)
     assert "too coarse" in coarse.calibration.reason and not coarse.calibrating
     np.testing.assert_array_equal(coarse.friction.coulomb, FrictionModel.from_robot(yumi).coulomb)
     readings = coarse._calibration_run
-    readings.encoder_step[:] = np.inf
+    readings._moves.clear()  # no count known
     unchecked, fine = readings.result(), run(2**14).calibration
     assert unchecked.accepted and fine.accepted
     assert abs(unchecked.gravity_error[3] - fine.gravity_error[3]) > 0.1

@@ -42,7 +42,9 @@ reference drawn only to a joint that rests itself (``admittance.settled_referenc
 the dither kept under the compensation's ceiling (``feedforward.dither_within``), then
 active mode's virtual damping shaped like the arm's inertia (``admittance.virtual_damping``),
 its dither twice the thesis' (``dither.ACTIVE_AMPLITUDE``) and a creep parking only the
-joint that crept (``DitherParameters.creep``). A faster step must reproduce them.
+joint that crept (``DitherParameters.creep``), then the gravity the calibration measured
+known to its readings' scatter in each joint's band (``LeadThrough.joint_std``; the calibrated
+idle twin's outputs moved by 2e-9). A faster step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::
