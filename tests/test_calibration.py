@@ -402,13 +402,16 @@ def test_encoders_too_coarse_for_the_calibration_refuse_it_with_the_reason(yumi)
     Unchecked, the same run's readings are accepted with joint 4's gravity error 0.2 Nm off
     what 2¹⁴ counts read (there the released arm ran 238 mrad); checked, the controller
     guides with its model. 128 counts (0.49 mrad, less than the 0.8 mrad the motion moves
-    in two periods) are read.
+    in two periods) are read. At 1 kHz the line is 0.2 mrad: 165 counts (0.38 mrad, a
+    14-bit encoder on the joint's side), which unchecked left dry #3's joint 3 with a gravity
+    error 1.67 Nm off (docs), are refused, and the family's encoders are read.
     """
 
-    def run(counts):
+    def run(counts, dt=0.004):
         plant = sample_plant(yumi, 1, "dry", PlantRanges(encoder_counts=counts))
-        controller = LeadThrough(yumi, calibrate=True)
-        simulate(DigitalTwin(yumi, plant.config), controller, controller.calibration_time + 0.05)
+        controller = LeadThrough(yumi, dt=dt, calibrate=True)
+        twin = DigitalTwin(yumi, dataclasses.replace(plant.config, control_dt=dt))
+        simulate(twin, controller, controller.calibration_time + 0.05)
         return controller
 
     coarse = run(64)
@@ -421,6 +424,9 @@ def test_encoders_too_coarse_for_the_calibration_refuse_it_with_the_reason(yumi)
     assert unchecked.accepted and fine.accepted
     assert abs(unchecked.gravity_error[3] - fine.gravity_error[3]) > 0.1
     assert run(128).calibration.accepted
+    at_1khz = run(165, dt=0.001).calibration
+    assert not at_1khz.accepted and "two periods (0.2 mrad)" in at_1khz.reason
+    assert run(2**14, dt=0.001).calibration.accepted
 
 
 def test_the_plausible_friction_band_is_symmetric_in_the_ratio():
