@@ -794,7 +794,7 @@ class CalibrationRun:
             discrepancy: The measured motor torque minus the command it measures [Nm]
                 (None: the robot measures none); averaged into the torque offset.
         """
-        self._note_step(q)
+        self._note_move(q)
         if t < self.parameters.settle_time:
             return
         if discrepancy is not None:
@@ -802,7 +802,7 @@ class CalibrationRun:
             self._discrepancies += 1
         self._balance.add(t, q, tau)
 
-    def _note_step(self, q: FloatArray) -> None:
+    def _note_move(self, q: FloatArray) -> None:
         """Keep each joint's change of angle from the sample before (:attr:`encoder_step`)."""
         q = np.asarray(q, dtype=float)
         if self._last_q is not None:
@@ -856,9 +856,12 @@ class CalibrationRun:
         """
         if len(t) < 2:
             return np.zeros(self.pose.shape, dtype=bool)
-        period = float(np.median(np.diff(t)))
         step = self.encoder_step
-        return np.isfinite(step) & (step > 2.0 * self.parameters.speed * period)
+        return np.isfinite(step) & (step > self._two_periods(t))
+
+    def _two_periods(self, t: FloatArray) -> float:
+        """How far the motion moves a joint at its speed in two periods of ``t`` [rad]."""
+        return 2.0 * self.parameters.speed * float(np.median(np.diff(t)))
 
     def readings(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Times [s], joint velocities [rad/s] and readings [Nm] of the samples recorded.
@@ -957,10 +960,9 @@ class CalibrationRun:
             return None
         joints = ", ".join(str(j + 1) for j in np.flatnonzero(unresolved))
         step = 1e3 * np.max(self.encoder_step[unresolved])
-        moved = 2e3 * float(np.median(np.diff(t))) * self.parameters.speed
         return (f"the encoder(s) of joint(s) {joints} step up to {step:.3g} mrad, more than "
-                f"the motion moves in two periods ({moved:.3g} mrad): too coarse to read "
-                "its pace")  # fmt: skip
+                f"the motion moves in two periods ({1e3 * self._two_periods(t):.3g} mrad): "
+                "too coarse to read its pace")  # fmt: skip
 
     def drift(self, t: FloatArray, plus: FloatArray, minus: FloatArray) -> FloatArray:
         """How far each joint's readings moved from the first cycle to the last [Nm].

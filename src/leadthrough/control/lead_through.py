@@ -621,8 +621,8 @@ class LeadThrough:
         self._gravity_reference = np.where(known, measured_gravity, 0.0)
         # the gravity error is read from the same readings as the level, (e₊ + e₋) / 2
         # against (e₊ − e₋) / 2: as far off as the level's reading is
-        if calibration.coulomb_spread is not None:
-            self._gravity_reading_std = np.where(known, calibration.coulomb_spread, 0.0)
+        spread = calibration.coulomb_spread
+        self._gravity_reading_std = np.where(known, 0.0 if spread is None else spread, 0.0)
         self.law.model_error.calibrate(np.zeros(self.robot.n_joints), self._gravity_reference)
 
     def _follow_level_error(self, q: FloatArray) -> None:
