@@ -39,6 +39,8 @@ Usage:
         [--no-torque-sensor]          (drives that report no torque: tau_measured None)
         [--pace 2]                    (hands twice as slow: lines in 8 s, the circle in 12 s)
         [--grab-at-once]              (hands that grab while the arm calibrates)
+        [--rest 5]                    (hands that grab after the arm rested 5 s, nobody
+                                       touching: its dither parks after 2 s)
         [--identified]                (both modes with each plant's friction identified
                                        first, as `leadthrough identify` would on the arm)
 """
@@ -271,6 +273,14 @@ def main(argv: list[str] | None = None) -> None:
         "does not wait): both modes",
     )
     parser.add_argument(
+        "--rest",
+        type=float,
+        default=0.0,
+        help="every hand grabs after the arm rested this long [s], nobody touching, after "
+        "the calibration or from the start without one (default 0; the dither parks after "
+        "2 s): both modes",
+    )
+    parser.add_argument(
         "--no-torque-sensor",
         action="store_true",
         help="plants whose drives report no torque (JointState.tau_measured None): both "
@@ -318,7 +328,12 @@ def main(argv: list[str] | None = None) -> None:
         parser.error(str(error))
     if not (math.isfinite(args.pace) and args.pace > 0.0):
         parser.error(f"--pace must be a number > 0, got {args.pace:g}")
-    total, start = len(cases(args.cases, seeds, hands, ranges)), time.perf_counter()
+    try:
+        total = len(cases(args.cases, seeds, hands, ranges, args.pace, args.grab_at_once,
+                          args.rest))  # fmt: skip
+    except ParameterError as error:
+        parser.error(f"--{error}")  # "--rest: …", the field the error names
+    start = time.perf_counter()
 
     def report(name: str, figures: dict[str, float]) -> None:
         print(row(name, figures), flush=True)
@@ -331,7 +346,7 @@ def main(argv: list[str] | None = None) -> None:
     print(HEADER)
     results, stats = evaluate(args.cases, factory, robot, report, seeds,
                               passive_factory, hands, ranges, args.pace,
-                              args.grab_at_once)  # fmt: skip
+                              args.grab_at_once, args.rest)  # fmt: skip
     print_summary(stats, old)
     print(over_goal_line(results))
     print(uncalibrated_line(results))

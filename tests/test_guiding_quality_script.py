@@ -247,3 +247,33 @@ def test_hands_that_grab_at_once_are_named_and_find_the_arm_calibrating():
     waited = Case("dry", 9, "relaxed", "circle")
     _, recorder = _run(yumi, waited, "active", default_factory, np.inf, 0.1)
     assert recorder.controller.calibration.accepted
+
+
+def test_hands_that_grab_after_a_rest_are_named_and_find_the_dither_parked(capsys):
+    """``--rest S``: the arm rests S seconds, nobody touching, before the hand grabs.
+
+    After 2 s of rest (``DitherParameters.park_time``) the dither is off on every joint:
+    the hand that grabs then starts the arm without it, which a hand grabbing as the
+    controller starts never does. A rest below 0, or with ``--grab-at-once``, is refused.
+    """
+    from leadthrough.errors import ParameterError
+    from leadthrough.experiments.guiding import Case, _run, cases, uncalibrated_factory
+    from leadthrough.model import robots
+
+    assert {c.rest for c in cases("quick", rest=3.0)} == {3.0}
+    case = Case("dry", 1, "stiff", "sideways", rest=2.5)
+    assert case.name == "dry#1 stiff sideways after 2.5 s"
+    yumi = robots.yumi()
+    run, recorder = _run(yumi, case, "active", uncalibrated_factory, np.inf, 0.02)
+    controller = recorder.controller
+    assert run.t[0] == 0.0 and controller.time == pytest.approx(2.5 + run.t[-1], abs=1e-9)
+    assert controller.feed_forward.dither.parked  # the hand finds the dither parked
+    _, recorder = _run(yumi, Case("dry", 1, "stiff", "sideways"), "active",
+                       uncalibrated_factory, np.inf, 0.02)  # fmt: skip
+    assert not recorder.controller.feed_forward.dither.parked
+    with pytest.raises(ParameterError, match="rest"):
+        Case("dry", 1, "stiff", "sideways", rest=1.0, grab_at_once=True)
+    for argv in (["--rest", "-1"], ["--rest", "1", "--grab-at-once"]):
+        with pytest.raises(SystemExit):
+            guiding_quality.main(argv)
+        assert "--rest: " in capsys.readouterr().err

@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 
 from leadthrough.control.calibration import CalibrationParameters
 from leadthrough.control.lead_through import LeadThrough
+from leadthrough.errors import ParameterError
 from leadthrough.friction.identification import identify_friction
 from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
@@ -46,6 +47,7 @@ from leadthrough.twin.paths import Circle, Line, Path
 from leadthrough.twin.plants import PlantRanges, sample_plant
 from leadthrough.twin.runner import SimulationResult, simulate
 from leadthrough.twin.simulator import DigitalTwin, TwinConfig
+from leadthrough.validation import real
 
 BoolArray = NDArray[np.bool_]
 
@@ -117,6 +119,9 @@ class Case:
         grab_at_once: The hand grabs as the run starts, while the arm may still calibrate
             (an operator who does not wait); else once the controller's
             ``calibration_time`` is over.
+        rest: The arm rests this long, nobody touching, before the hand grabs (after the
+            calibration, or from the start without one) [s]: an operator who takes the
+            arm a while after starting it, who finds the dither parked after 2 s.
     """
 
     physics: str
@@ -126,16 +131,25 @@ class Case:
     ranges: PlantRanges = field(default_factory=PlantRanges)
     pace: float = 1.0
     grab_at_once: bool = False
+    rest: float = 0.0
+
+    def __post_init__(self) -> None:
+        real("rest", self.rest, minimum=0.0, error=ParameterError)
+        if self.grab_at_once and self.rest > 0.0:
+            raise ParameterError("rest", "a hand that grabs at once does not wait: rest must be 0")
 
     @property
     def name(self) -> str:
         """Short label, e.g. ``dry#1 stiff sideways``.
 
-        ``… pace 2`` at another pace, ``… at once`` for a hand that grabs at once.
+        ``… pace 2`` at another pace, ``… at once`` for a hand that grabs at once,
+        ``… after 5 s`` for one that grabs after a rest.
         """
         label = f"{self.physics}#{self.seed} {self.hand} {self.path}"
         if self.pace != 1.0:
             label = f"{label} pace {self.pace:g}"
+        if self.rest > 0.0:
+            label = f"{label} after {self.rest:g} s"
         return f"{label} at once" if self.grab_at_once else label
 
 
@@ -202,6 +216,7 @@ def cases(
     ranges: PlantRanges | None = None,
     pace: float = 1.0,
     grab_at_once: bool = False,
+    rest: float = 0.0,
 ) -> list[Case]:
     """The benchmark's cases: ``"full"`` (14 per seed and physics), ``"quick"`` or ``"contact"``.
 
@@ -215,8 +230,9 @@ def cases(
         ranges: The plant family of every case (default :class:`PlantRanges`).
         pace: Every hand's path takes ``pace`` times its duration (:attr:`Case.pace`).
         grab_at_once: Every hand grabs as the run starts (:attr:`Case.grab_at_once`).
+        rest: Every hand grabs after the arm rested this long [s] (:attr:`Case.rest`).
     """
-    return [replace(case, pace=pace, grab_at_once=grab_at_once)
+    return [replace(case, pace=pace, grab_at_once=grab_at_once, rest=rest)
             for case in _cases(kind, seeds, hands, ranges)]  # fmt: skip
 
 
@@ -370,9 +386,9 @@ def _run(
     """One run from the grab on (t = 0 at the grab) and what the controller estimated.
 
     The hand grabs the flange where it is once the calibration is over (the calibration
-    may have moved the arm a little), or at once (:attr:`Case.grab_at_once`): its path
-    starts there. The plant runs at the controller's period (``dt``, 4 ms when it has
-    none); its delay is in periods.
+    may have moved the arm a little) and the arm has rested :attr:`Case.rest`, or at once
+    (:attr:`Case.grab_at_once`): its path starts there. The plant runs at the controller's
+    period (``dt``, 4 ms when it has none); its delay is in periods.
     """
     plant = sample_plant(robot, case.seed, case.physics, case.ranges)
     if isinstance(factory, IdentifiedFirst):
@@ -380,7 +396,7 @@ def _run(
     else:
         recorder = _Recorder(factory(robot, mode))
     calibrating = getattr(recorder.controller, "calibration_time", CalibrationParameters().duration)
-    grab = 0.0 if case.grab_at_once else float(calibrating)
+    grab = 0.0 if case.grab_at_once else float(calibrating) + case.rest
     config = replace(plant.config, control_dt=recorder.dt or plant.config.control_dt)
     if case.path == PRESS:  # a table under the tool where it starts (it points down at home)
         start = _flange_position(robot, robot.home() if plant.start is None else plant.start)
@@ -733,6 +749,7 @@ def evaluate(
     ranges: PlantRanges | None = None,
     pace: float = 1.0,
     grab_at_once: bool = False,
+    rest: float = 0.0,
 ) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, float]]]:
     """Every case of ``cases(kind)``: default passive against the active controller.
 
@@ -751,13 +768,14 @@ def evaluate(
             developed on; e.g. ``PlantRanges(position_amplitude=0.25)`` is held out).
         pace: Every hand's path takes ``pace`` times its duration (:attr:`Case.pace`).
         grab_at_once: Every hand grabs as the run starts (:attr:`Case.grab_at_once`).
+        rest: Every hand grabs after the arm rested this long [s] (:attr:`Case.rest`).
 
     Returns:
         The figures per case name (:func:`figures`) and their :func:`summary`.
     """
     robot = _robot_or_yumi(robot)
     results = {}
-    for case in cases(kind, seeds, hands, ranges, pace, grab_at_once):
+    for case in cases(kind, seeds, hands, ranges, pace, grab_at_once, rest):
         passive = run_case(case, "passive", passive_factory, robot=robot)
         active = run_case(case, "active", controller_factory, robot=robot)
         results[case.name] = figures(passive, active)
