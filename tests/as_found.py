@@ -6,6 +6,7 @@ import numpy as np
 
 from leadthrough.control import active_law, admittance, calibration, dither, feedforward
 from leadthrough.control.active_law import ActiveLaw
+from leadthrough.control.bias import ModelErrorBias
 from leadthrough.control.calibration import CalibrationParameters, CalibrationRun
 from leadthrough.control.dither import DitherParameters
 from leadthrough.control.feedforward import PassiveFeedForward
@@ -214,3 +215,19 @@ def diagonal_damping(monkeypatch) -> None:
 def told_measurement_delay(monkeypatch) -> None:
     """Every controller keeps the ``measurement_delay`` it is told, as before it read it."""
     monkeypatch.setattr(InterfaceDelay, "update", lambda estimate, tau_measured: estimate.delay)
+
+
+def confidence_at_rest(monkeypatch) -> None:
+    """Every law's bias vouches for the gravity model at rest too, as before (the NumPy law).
+
+    Each joint's confidence grew as fast as nobody guided, sliding or not: a rest of a few
+    seconds narrowed the gravity tolerance to the change of G since, though stiction had
+    held the model's error unseen there.
+    """
+    monkeypatch.setattr(ActiveLaw, "compiled", False)
+    update = ModelErrorBias.update
+
+    def as_if_sliding(self, estimate, gravity, dt, bound, sliding, unguided=1.0):
+        return update(self, estimate, gravity, dt, bound, np.ones_like(sliding), unguided)
+
+    monkeypatch.setattr(ModelErrorBias, "update", as_if_sliding)

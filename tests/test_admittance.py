@@ -436,3 +436,30 @@ def test_the_bias_learns_nothing_while_a_joint_is_in_its_limit_zone(compiled):
         learned[name] = law.model_error.bias / estimate
     assert np.all(learned["clear"] > 0.5)
     assert np.all(learned["in the zone"] == 0.0)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_only_a_joint_that_slides_vouches_for_its_gravity_model(compiled):
+    """What growing the confidence only where a joint slides prevents: a rest trusted.
+
+    Nobody guiding for 10 s (ten learning times at rest), the bias takes what the readings
+    show, but every joint's gravity tolerance stays the whole model's
+    (``gravity_uncertainty · |G|``, within the 0.1 % of sliding the friction model's
+    sigmoid leaves at rest): stiction may hold its error unseen there. Sliding
+    unguided for as long (a released arm coasting; here joints 1–3 only), those joints'
+    confidence reaches 1 and their tolerance the change of G since; the resting ones keep
+    theirs. Vouched for at rest, the tolerance narrowed to the change of G on every joint.
+    """
+    gravity, reading = np.linspace(2.0, 8.0, N), np.full(N, 0.01)
+    sliding_speed = np.where(np.arange(N) < 3, 0.05, 0.0)  # rad/s, above rest_velocity
+    whole = lt.LeadThroughParameters().gravity_uncertainty * gravity
+    for qd in (np.zeros(N), sliding_speed):
+        law = _active_law(compiled)
+        for _ in range(2500):
+            law.weight[:] = 0.0  # nobody guides
+            law.operator_torque(reading, HOME, qd, gravity)
+        tolerance = law.model_error.tolerance(gravity)
+        np.testing.assert_allclose(law.model_error.bias, reading, rtol=1e-3)
+        slid = np.abs(qd) > 0.0
+        np.testing.assert_allclose(tolerance[~slid], whole[~slid], rtol=0.01)
+        np.testing.assert_allclose(tolerance[slid], 0.0, atol=1e-3 * whole.max())

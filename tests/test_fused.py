@@ -24,7 +24,7 @@ def _state(law: ActiveLaw) -> np.ndarray:
     references, bias = law.references, law.model_error
     return np.concatenate([law.drive, law.weight, law.feedback, law.sustained,
                            law.damping_weight, law.signed_weight,
-                           bias.bias, bias.gravity_learned, [bias.confidence],
+                           bias.bias, bias.gravity_learned, bias.confidence,
                            references.q_ref, references.qd_ref])  # fmt: skip
 
 

@@ -44,7 +44,9 @@ active mode's virtual damping shaped like the arm's inertia (``admittance.virtua
 its dither twice the thesis' (``dither.ACTIVE_AMPLITUDE``) and a creep parking only the
 joint that crept (``DitherParameters.creep``), then the gravity the calibration measured
 known to its readings' scatter in each joint's band (``LeadThrough.joint_std``; the calibrated
-idle twin's outputs moved by 2e-9). A faster step must reproduce them.
+idle twin's outputs moved by 2e-9), then each joint's confidence in its gravity model grown
+only as fast as it slides with nobody guiding, not at rest (``ModelErrorBias.update``: the
+active cases without an accepted calibration moved). A faster step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

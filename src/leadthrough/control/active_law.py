@@ -311,7 +311,7 @@ class ActiveLaw:
             return self.drive
         self.friction_terms(q, qd)  # into the rows the compiled drive reads
         bias, (level, viscous, upper, lower) = self.model_error, self._term_rows
-        bias.confidence = operator_drive(estimate, q, gravity, level, viscous, upper, lower,
+        operator_drive(estimate, q, gravity, level, viscous, upper, lower,
             self._joint_constants, self._drive_scalars, self.narrowing, bias.bias,
             bias.gravity_learned, bias.confidence, self.weight, self.drive, self.feedback,
             self.residual, self.uncertainty)  # fmt: skip
@@ -356,7 +356,9 @@ class ActiveLaw:
         plausible = self._friction_tolerance + p.gravity_uncertainty * np.abs(gravity)
         clear_of_limits = bool(np.all((q > self._reference_low) & (q < self._reference_high)))
         unguided = (1.0 - float(np.max(self.weight))) ** 2 if clear_of_limits else 0.0
-        self.model_error.update(estimate, gravity, self.dt, 2.0 * plausible, unguided)
+        _, _, upper, lower = self.friction.sigmoid_terms(qd, q)
+        sliding = 1.0 - 0.5 * (upper - lower)  # 0 at rest, 1 where the level is known
+        self.model_error.update(estimate, gravity, self.dt, 2.0 * plausible, sliding, unguided)
         residual = dead_zone(estimate, 0.0, self.model_error.bias)
         margin = self._friction_margin(q, qd)
         if self.margin_relief:

@@ -10,6 +10,13 @@ the whole uncertainty of the gravity model (``gravity_uncertainty · |G(q)|``: m
 drive gains); once the
 bias is learned at a pose, only the uncertainty of how gravity *changed* since then
 (``gravity_uncertainty · |G(q) − G(q_learned)|``). The dead-zone of the controller uses it.
+
+Only a joint that slides vouches for its gravity model: at rest its friction may hold
+any gravity error below breakaway unseen (thesis §5.3), and the bias learned there holds
+what the readings show (a torque offset), not that error. So each joint's confidence
+grows only as fast as it slides with nobody guiding (a released arm coasting); learned at
+rest, it let an arm that had rested 5 s run 0.4 rad once let go, on masses 10 % off
+(docs/active_mode_log.md, *A gravity model vouched for at rest*).
 """
 
 from __future__ import annotations
@@ -32,7 +39,8 @@ class ModelErrorBias:
         self.learning_time = learning_time
         self.gravity_uncertainty = gravity_uncertainty
         self.bias = np.zeros(n_joints)
-        self.confidence = 0.0  # 0: nothing learned, → 1 after a few learning times at rest
+        #: per joint, 0: nothing learned, → 1 after a few learning times sliding unguided
+        self.confidence = np.zeros(n_joints)
         #: G at the poses the bias was learned, weighted as it was learned [Nm]
         self.gravity_learned = np.zeros(n_joints)
 
@@ -42,6 +50,7 @@ class ModelErrorBias:
         gravity: FloatArray,
         dt: float,
         bound: FloatArray,
+        sliding: FloatArray,
         unguided: float = 1.0,
     ) -> FloatArray:
         """Learn as fast as nobody guides; return the estimate minus the bias [Nm].
@@ -53,6 +62,8 @@ class ModelErrorBias:
             bound: Largest plausible model error per joint [Nm]: the bias never exceeds it,
                 so a push against an end-stop or an operator holding the arm still is not
                 learned as model error.
+            sliding: How much each joint slides, in [0, 1] (0 at rest, 1 where its
+                friction is known up to its level): scales its confidence's rate.
             unguided: How sure it is that nobody guides, in [0, 1]: scales the learning
                 rate (0: learn nothing, e.g. at an end-stop or while the operator pushes).
         """
@@ -62,14 +73,14 @@ class ModelErrorBias:
             # np.clip's result (NaN included) at half its cost
             self.bias = np.minimum(np.maximum(self.bias + rate * residual, -bound), bound)
             self.gravity_learned = self.gravity_learned + rate * (gravity - self.gravity_learned)
-            self.confidence += rate * (1.0 - self.confidence)
+            self.confidence += rate * sliding * (1.0 - self.confidence)
         return estimate - self.bias
 
     def calibrate(self, bias: FloatArray, gravity: FloatArray) -> None:
         """Take a bias measured by the start-up calibration at a pose where G = ``gravity``."""
         self.bias = np.array(bias, dtype=float)
         self.gravity_learned = np.array(gravity, dtype=float)
-        self.confidence = 1.0
+        self.confidence = np.ones_like(self.bias)
 
     def tolerance(self, gravity: FloatArray) -> FloatArray:
         """Error that may remain after removing the bias [Nm].

@@ -56,7 +56,7 @@ ADMITTANCE_SCALARS = ("limit_aware", "reanchor_error", "damping_time", "rest_dam
 def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, scalars,
                    narrowing, bias, gravity_learned, confidence, weight, drive, feedback,
                    residuals, uncertainty):  # fmt: skip
-    """One period of the operator torque, in place; returns the bias' new confidence.
+    """One period of the operator torque, in place (the bias' confidence included).
 
     Args:
         estimate: Observer estimate τ̂_ext [Nm].
@@ -73,7 +73,8 @@ def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, sc
             uncertainty [–] (``ActiveLaw.narrowing``).
         bias: The learned bias [Nm] (``ModelErrorBias.bias``), updated.
         gravity_learned: ``ModelErrorBias.gravity_learned`` [Nm], updated.
-        confidence: The bias' confidence [–].
+        confidence: The bias' confidence per joint [–], updated (as fast as the joint
+            slides, ``1 − (upper − lower) / 2``: ``ModelErrorBias.update``).
         weight: Operator weights [–], updated.
         drive: Operator drive [Nm], written.
         feedback: The admittance's last tracking torque [Nm].
@@ -97,7 +98,8 @@ def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, sc
             learned = learned if learned > -bound or learned != learned else -bound
             bias[i] = learned if learned < bound or learned != learned else bound
             gravity_learned[i] = gravity_learned[i] + rate * (gravity[i] - gravity_learned[i])
-        confidence += rate * (1.0 - confidence)
+            sliding = 1.0 - 0.5 * (upper[i] - lower[i])
+            confidence[i] = confidence[i] + rate * sliding * (1.0 - confidence[i])
     for i in range(n):
         b = bias[i]
         band_high = (b if b > 0.0 or b != b else 0.0) + 0.0
@@ -120,7 +122,8 @@ def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, sc
         residual = (residual - margin) - gain_uncertainty * feedback[i]
         unknown = abs(gravity[i])
         changed = abs(gravity[i] - gravity_learned[i])
-        tolerance = gravity_uncertainty * ((1.0 - confidence) * unknown + confidence * changed)
+        tolerance = gravity_uncertainty * ((1.0 - confidence[i]) * unknown
+                                           + confidence[i] * changed)  # fmt: skip
         spread = (joint[4, i] + tolerance) + half_level * (upper[i] - lower[i]) * narrowing[i]
         residuals[i], uncertainty[i] = residual, spread
         if knee == 0.0:
@@ -132,7 +135,6 @@ def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, sc
             w = z2 / (1.0 + z2)
         weight[i] = w
         drive[i] = residual * w
-    return confidence
 
 
 @kernel
