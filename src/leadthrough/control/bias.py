@@ -15,8 +15,9 @@ Only a joint that slides vouches for its gravity model: at rest its friction may
 any gravity error below breakaway unseen (thesis §5.3), and the bias learned there holds
 what the readings show (a torque offset), not that error. So each joint's confidence
 grows only as fast as it slides with nobody guiding (a released arm coasting); learned at
-rest, it let an arm that had rested 5 s run 0.4 rad once let go, on masses 10 % off
-(docs/active_mode_log.md, *A gravity model vouched for at rest*).
+rest, it let an uncalibrated arm that had rested 5 s run 0.4 rad once let go, with masses
+10 % and drive gains 20 % off (docs/guiding_results.md, *Hands that take the arm after a
+rest*).
 """
 
 from __future__ import annotations
@@ -85,8 +86,8 @@ class ModelErrorBias:
     def tolerance(self, gravity: FloatArray) -> FloatArray:
         """Error that may remain after removing the bias [Nm].
 
-        The gravity model's: all of it before anything is learned, only its change since
-        the bias was learned after.
+        The gravity model's, per joint: all of it until the joint slid with nobody guiding
+        (or a calibration measured it), only its change since the bias was learned after.
         """
         unknown = np.abs(gravity)
         changed = np.abs(gravity - self.gravity_learned)
