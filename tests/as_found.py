@@ -4,10 +4,11 @@ import dataclasses
 
 import numpy as np
 
-from leadthrough.control import active_law, admittance, calibration, dither, feedforward
+from leadthrough.control import active_law, admittance, dither, feedforward
 from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.bias import ModelErrorBias
 from leadthrough.control.calibration import CalibrationParameters, CalibrationRun
+from leadthrough.control.calibration import run as calibration_run
 from leadthrough.control.dither import DitherParameters
 from leadthrough.control.feedforward import PassiveFeedForward
 from leadthrough.control.interface_delay import InterfaceDelay
@@ -174,7 +175,9 @@ def observer_readings(monkeypatch) -> None:
         velocity = np.array([sample[0] for sample in observed]).reshape(len(t), -1)
         estimate = np.array([sample[1] for sample in observed]).reshape(len(t), -1)
         speed, pace = np.abs(velocity), run.parameters.speed
-        paced = (speed > calibration._SLIDING * pace) & (speed <= calibration._JUMPING * pace)
+        sliding, jumping = calibration_run._SLIDING * pace, calibration_run._JUMPING * pace
+        paced = (speed > sliding) & (speed <= jumping)
+        paced = (speed > sliding) & (speed <= jumping)
         return t, velocity, np.where(paced, estimate, np.nan)
 
     monkeypatch.setattr(LeadThrough, "_calibrate", observed)

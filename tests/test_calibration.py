@@ -8,7 +8,6 @@ import pytest
 
 import leadthrough as lt
 from as_found import SIX_HERTZ, six_hertz_calibration, slow_calibration_motion, unchecked_push
-from leadthrough.control import calibration
 from leadthrough.control.calibration import (
     Calibration,
     CalibrationParameters,
@@ -17,6 +16,7 @@ from leadthrough.control.calibration import (
     gravity_share,
     implausible_friction,
 )
+from leadthrough.control.calibration import run as calibration_run
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.control.parameters import LeadThroughParameters
 from leadthrough.control.tracking import loop_damping
@@ -814,7 +814,7 @@ def test_the_column_medians_are_numpys_nanmedian():
         values[:, 3] = np.nan
         with pytest.warns(RuntimeWarning):  # NumPy's, for the column of NaNs
             expected = np.nanmedian(values, axis=0)
-        np.testing.assert_array_equal(calibration._column_medians(values), expected)
+        np.testing.assert_array_equal(calibration_run._column_medians(values), expected)
 
 
 def test_the_settings_follow_a_slower_control_period():

@@ -37,10 +37,11 @@ from as_found import (
     unchecked_drift,
     unread_torque_offset,
 )
-from leadthrough.control import active_law, calibration, lead_through
+from leadthrough.control import active_law, lead_through
 from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.admittance import AdmittanceState
 from leadthrough.control.calibration import Calibration
+from leadthrough.control.calibration import run as calibration_run
 from leadthrough.control.feedforward import PassiveFeedForward
 from leadthrough.control.lead_through import LeadThrough
 from leadthrough.experiments.guiding import Case, default_factory, run_case, uncalibrated_factory
@@ -126,8 +127,8 @@ def _calibration_of_the_time(monkeypatch):
     """
     slow_calibration_motion(monkeypatch)
     unread_torque_offset(monkeypatch)
-    monkeypatch.setattr(calibration, "_MEASURED", 0.0)
-    monkeypatch.setattr(calibration.CalibrationRun, "payload", _plain_payload_fit)
+    monkeypatch.setattr(calibration_run, "_MEASURED", 0.0)
+    monkeypatch.setattr(calibration_run.CalibrationRun, "payload", _plain_payload_fit)
 
 
 #: Dry #59 of the family: joint 2's drive applies 1.094× what it is told, and the shoulder
@@ -171,7 +172,7 @@ def test_a_joint_the_calibration_ran_away_keeps_none_of_its_friction(trusted, mo
     level twice the wrist's: the released arm ran on 1.25 rad in active mode.
     """
     if trusted:
-        monkeypatch.setattr(calibration.Calibration, "lowered",
+        monkeypatch.setattr(calibration_run.Calibration, "lowered",
                             lambda self: np.ones_like(self.friction_scale))  # fmt: skip
     result = run_case(RAN_AWAY, "active")
     assert not result.calibrated
@@ -429,7 +430,7 @@ def test_a_joint_running_ahead_of_its_references_is_braked_not_followed(cls, run
     when the case was found; today's reference stays, which also stops it), and the
     measurement delay as told (the plant's, read from the data, also stops it).
     """
-    monkeypatch.setattr(calibration, "_JUMPING", np.inf)
+    monkeypatch.setattr(calibration_run, "_JUMPING", np.inf)
     _calibration_of_the_time(monkeypatch)
     observer_readings(monkeypatch)
     own_rest_bands(monkeypatch)
@@ -459,7 +460,7 @@ def test_a_calibration_that_reads_only_paced_sliding_lets_the_wrist_stop(jumps_r
     _calibration_of_the_time(monkeypatch)
     observer_readings(monkeypatch)
     if jumps_read:
-        monkeypatch.setattr(calibration, "_JUMPING", np.inf)
+        monkeypatch.setattr(calibration_run, "_JUMPING", np.inf)
     result = run_case(JUMPS_READ, "active")
     _runs_on_or_stops(result, jumps_read, beyond=0.05)
 
@@ -478,7 +479,7 @@ def test_a_joint_the_calibration_read_only_a_few_times_keeps_its_level(few_read,
     unread_torque_offset(monkeypatch)
     observer_readings(monkeypatch)
     if few_read:
-        monkeypatch.setattr(calibration, "_MEASURED", 0.0)
+        monkeypatch.setattr(calibration_run, "_MEASURED", 0.0)
     result = run_case(FEW_READINGS, "passive", _passive())
     _runs_on_or_stops(result, few_read, beyond=0.1)
 
@@ -494,7 +495,7 @@ def test_a_payload_the_gravity_errors_do_not_show_stays_out_of_the_model(plain, 
     unread_torque_offset(monkeypatch)
     constant_gravity_bias(monkeypatch)
     if plain:
-        monkeypatch.setattr(calibration.CalibrationRun, "payload", _plain_payload_fit)
+        monkeypatch.setattr(calibration_run.CalibrationRun, "payload", _plain_payload_fit)
     result = run_case(SPURIOUS_PAYLOAD, "passive", _passive())
     _runs_on_or_stops(result, plain, beyond=0.1)
 

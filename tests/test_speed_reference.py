@@ -15,9 +15,9 @@ tool (``estimation.tool_force``), then a friction level nothing measured on this
 taken as known to the spread of units only (``unmeasured_friction_error``), then lost
 references re-anchored without taking up a joint's run (``admittance.reanchored``), then
 the calibration reading a joint only while it slides at the motion's pace
-(``calibration._JUMPING``), then the velocity reference of a lagging joint unwound
+(``calibration.run._JUMPING``), then the velocity reference of a lagging joint unwound
 towards its velocity (``admittance.unwound``), then the calibration measuring a joint's
-level only if it slid at pace long enough (``calibration._MEASURED``) and a payload only
+level only if it slid at pace long enough (``calibration.run._MEASURED``) and a payload only
 if it stands out of the model's gravity error (``CalibrationRun.payload``), then the
 calibration sliding 10 mrad at 0.1 rad/s, above the Stribeck range (``CalibrationParameters``),
 then a resting joint's Coulomb band in the law narrowed by the joints read together
