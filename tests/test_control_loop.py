@@ -65,7 +65,7 @@ def test_loop_runs_the_periods_and_reports_the_compute_time():
     twin, ctl, sent = ClosableTwin(ROBOT), controller(), []
     report = lt.control_loop(twin, ctl, duration=0.2, after_period=lambda s, c: sent.append(c))
     assert report.periods == len(sent) == 50
-    assert twin.time == pytest.approx(0.2)
+    assert twin.time == pytest.approx(0.2 + 0.5)  # then the hold at the end, stop_time
     assert report.ended == "finished" and not twin.closed
     assert report.overruns == ctl.supervisor.overruns
     assert 0.0 < report.compute_median <= report.compute_max
@@ -105,6 +105,50 @@ def test_ctrl_c_brings_the_moving_arm_to_the_safe_stop_and_closes_the_robot():
     assert twin.closed
     assert moving[0] > 0.1  # [rad/s]
     assert np.max(np.abs(twin.truth.qd)) < 0.01  # stopped within the 0.5 s of the safe stop
+
+
+class LastCommandHeld(ClosableTwin):
+    """The twin as a drive that holds the last torque it got until the next one comes."""
+
+    def send_torque(self, tau) -> None:
+        """Send ``tau`` and keep it."""
+        self.last = np.array(tau, dtype=float)
+        super().send_torque(tau)
+
+    def coast(self, seconds: float) -> None:
+        """Nobody sends anything for ``seconds``: the drive holds the last torque."""
+        for _ in range(round(seconds / self.dt)):
+            super().send_torque(self.last)
+
+
+@pytest.mark.parametrize("hold_at_end", [True, False])
+def test_a_loop_that_ends_leaves_the_arm_held_not_guided(hold_at_end):
+    """The loop ends while a hand drags the arm at 1.4 rad/s: stopped and held, supervised.
+
+    A drive that holds its last command (2 s of it here, the hand gone as the loop ends)
+    carried the arm 125 mrad on under the guiding torque nobody supervised, 22 mrad with
+    the safe stop. ``hold_at_end=False`` (the twin's ``simulate``, which goes on) keeps it.
+    """
+    start = lt.Dynamics(ROBOT).pose(ROBOT.home())[:3, 3]
+    line = Line(start, start + np.array([0.0, 0.3, 0.0]), duration=1.0)
+    twin = LastCommandHeld(ROBOT, operator=During(Hand(line), 0.0, 0.6))
+    ctl, guided = lt.LeadThrough(ROBOT, "active"), []
+    report = lt.control_loop(
+        twin,
+        ctl,
+        duration=0.6,
+        hold_at_end=hold_at_end,
+        after_period=lambda s, c: guided.append(twin.truth.q.copy()),
+    )
+    assert report.ended == "finished" and not twin.closed
+    twin.coast(2.0)
+    travel = np.max(np.abs(twin.truth.q - guided[-1]))  # [rad], from the loop's last period
+    if hold_at_end:
+        assert ctl.state is SupervisorState.FAULT and "loop ended" in ctl.supervisor.fault_reason
+        assert travel < 0.05
+    else:
+        assert ctl.state is SupervisorState.TEACHING
+        assert travel > 0.1  # what the hold at the end prevents
 
 
 def test_a_robot_error_is_raised_after_the_safe_stop():

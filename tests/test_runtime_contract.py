@@ -19,6 +19,8 @@ from leadthrough.runtime.recording import read_recording
 from leadthrough.runtime.teaching import teach
 from leadthrough.safety.limits import SafetyParameters
 from leadthrough.safety.supervisor import SupervisorState
+from leadthrough.twin.mjcf import Payload
+from leadthrough.twin.model_error import ModelError
 from leadthrough.twin.operator import During, Hand
 from leadthrough.twin.paths import Line
 from leadthrough.twin.runner import simulate
@@ -98,8 +100,26 @@ def test_the_controller_takes_time_from_the_sample():
     for _ in range(3):
         positional.step(q, np.zeros(N))
     assert positional.time == pytest.approx(0.012)
-    with pytest.raises(ParameterError, match="JointState alone"):
-        controller.step(JointState(0.0, q, np.zeros(N), None), np.zeros(N))
+
+
+@pytest.mark.parametrize(
+    ("args", "reason"),
+    [((JointState(0.0, ROBOT.home(), np.zeros(N), None), np.zeros(N)), "JointState alone"),
+     ((ROBOT.home(), None, np.zeros(N)), "needs a JointState, or q and qd")],
+)  # fmt: skip
+def test_a_sample_the_step_cannot_read_is_a_fault_with_the_safe_stop(args, reason):
+    """step(state, qd) or step(q) without q̇: the fault names it, the arm held where it was.
+
+    Before, the positional form raised out of the step with no fault latched and nothing
+    returned to send (the same sample as a JointState faulted).
+    """
+    controller, q = lt.LeadThrough(ROBOT, "passive"), ROBOT.home() + 0.1
+    controller.step(JointState(0.0, q, np.zeros(N), None))
+    command = controller.step(*args)
+    assert controller.state is SupervisorState.FAULT
+    assert "sample failed: ParameterError" in controller.supervisor.fault_reason
+    assert reason in controller.supervisor.fault_reason
+    np.testing.assert_allclose(command, lt.Dynamics(ROBOT).gravity(q), atol=1e-9)
 
 
 def test_an_exception_inside_the_step_is_named_and_the_arm_stopped_that_period(monkeypatch):
@@ -213,6 +233,56 @@ def test_a_payload_changes_the_one_model_everywhere():
     )
     assert controller.observer.dynamics is dynamics and controller.feed_forward.dynamics is dynamics
     assert dynamics.robot.total_mass == pytest.approx(ROBOT.total_mass + 1.0)
+
+
+def test_a_reset_keeps_the_payload_and_a_calibration_weighs_what_is_beyond_it():
+    """set_payload, a fault, reset(): the model still carries it; a calibration adds to it.
+
+    Before, reset() rebuilt the model without the payload (0.70 and 1.01 Nm of gravity
+    missing on joints 2 and 3 with 0.5 kg, in the controller and in its safe stop), and a
+    calibration replaced it by the mass it weighed beyond it.
+    """
+    controller, q = lt.LeadThrough(ROBOT, "passive"), ROBOT.home()
+    payload = Payload(0.5, (0.0, 0.0, 0.05))
+    controller.set_payload(payload.mass, payload.com)
+    loaded = lt.Dynamics(ROBOT.with_payload(payload.mass, payload.com)).gravity(q)
+    controller.step(JointState(0.0, q, np.zeros(N), None))
+    controller.step(JointState(0.004, np.full(N, np.nan), np.zeros(N), None))
+    controller.reset()
+    controller.step(JointState(0.008, q, np.zeros(N), None))
+    np.testing.assert_allclose(controller.model.gravity, loaded)
+    assert controller.supervisor.robot.total_mass == pytest.approx(ROBOT.total_mass + 0.5)
+    weighed = lt.LeadThrough(ROBOT, "active", calibrate=True)
+    weighed.set_payload(payload.mass, payload.com)
+    twin = DigitalTwin(ROBOT, TwinConfig(model_error=ModelError(payload=payload)))
+    simulate(twin, weighed, weighed.calibration_time + 0.1)
+    assert weighed.calibration.accepted and abs(weighed.calibration.payload) < 0.05  # [kg]
+    assert weighed.dynamics.robot.total_mass == pytest.approx(ROBOT.total_mass + 0.5, abs=0.05)
+
+
+def test_the_safe_stop_holds_with_the_calibrated_gravity():
+    """A calibration that read the masses 15 % off: the safe stop holds with G corrected.
+
+    Before, guiding held the arm with the corrected G and the safe stop with the model's
+    (on a UR10e twin whose masses were 15 % heavier, 5.5 Nm off on shoulder and elbow).
+    """
+    controller = lt.LeadThrough(ROBOT, "passive", calibrate=True)
+    twin = DigitalTwin(ROBOT, TwinConfig(model_error=ModelError(mass_error=0.15), seed=3))
+    simulate(twin, controller, controller.calibration_time + 0.1)
+    assert controller.calibration.accepted
+    state = twin.read_state()
+    controller.supervisor.stop("test", state.t)
+    still = [JointState(state.t + 0.004 * (k + 1), state.q, np.zeros(N), None) for k in range(130)]
+    held = [controller.step(sample) for sample in still][-1]  # past the damped phase
+    gravity = lt.Dynamics(controller.dynamics.robot).gravity(state.q)
+    share = controller.gravity_share
+    expected = (
+        (1.0 - share) * gravity
+        + share * controller.dynamics.gravity(controller.calibration.pose)
+        - controller.calibration.bias
+    )
+    np.testing.assert_allclose(held, expected, atol=1e-9)
+    assert np.max(np.abs(held - gravity)) > 0.05  # [Nm]: not the model's own G
 
 
 def test_constraints_act_at_the_tool_centre_point():
@@ -423,7 +493,7 @@ def test_a_clock_stepping_back_further_than_the_largest_gap_stops_the_calibratio
 
     controller = lt.LeadThrough(ROBOT, "active", calibrate=True)
     lt.control_loop(SteppingBack(DigitalTwin(ROBOT), 0.0), controller, duration=0.4,
-                    wall_clock=False)  # fmt: skip
+                    wall_clock=False, hold_at_end=False)  # fmt: skip
     assert (controller.state is SupervisorState.FAULT) is fault
     reason = str(controller.supervisor.fault_reason)
     stepped = r"time stamp stepped back 9\.99\d s, from 0\.19\d+ to -9\.8\d+ s \(more than"
@@ -462,5 +532,6 @@ def test_teaching_records_after_the_command_is_sent_and_warms_up_first(tmp_path,
     robot = Ordered(DigitalTwin(ROBOT), journal)
     report = teach(robot, lt.LeadThrough(ROBOT, "passive"), tmp_path / "t.mcap", duration=0.04,
                    wall_clock=False)  # fmt: skip
-    assert journal == ["send", "record"] * 10
+    hold = round(0.5 / 0.004)  # then the hold at the end (stop_time), nothing recorded
+    assert journal == ["send", "record"] * 10 + ["send"] * hold
     assert report.loop.warm_up > 0.0

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 import pytest
@@ -329,15 +330,77 @@ def test_safe_stop_is_damped_then_pure_gravity(sup, dyn):
     assert not sup.check(DT, q_good, np.full(N, np.nan))
     damping = np.diag(dyn.mass(q_good)) / sup.parameters.braking_time
     tau = np.full(N, 1.0)
-    damped = sup.command(DT + 0.49, MID, qd, tau)
-    np.testing.assert_allclose(damped, np.clip(dyn.gravity(q_good) - damping * qd, -LIMIT, LIMIT))
-    np.testing.assert_allclose(sup.command(DT + 0.5, MID, qd, tau), dyn.gravity(q_good))
+    periods = round(sup.parameters.safe_stop_damping_time / DT)  # of the stop, 0.5 s
+    stop = [sup.command(DT * (2 + k), MID, qd, tau) for k in range(periods + 1)]
+    damped = np.clip(dyn.gravity(q_good) - damping * qd, -LIMIT, LIMIT)
+    np.testing.assert_allclose(stop[:periods], np.tile(damped, (periods, 1)))
+    np.testing.assert_allclose(stop[periods], dyn.gravity(q_good))
     sup.reset()
     sup.check(0.0, q_good, qd)
     sup.command(0.0, q_good, qd, np.full(N, np.inf))
     np.testing.assert_allclose(
         sup.command(0.0, q_good, np.full(N, np.nan), tau), dyn.gravity(q_good)
     )
+
+
+@pytest.mark.parametrize("when", ["a stamp from the past", "before the first sample"])
+def test_the_damped_stop_counts_its_own_periods_not_a_faulty_clock(sup, dyn, when):
+    """A fault on a stamp 10 s back, or latched before any sample on a Unix clock: damped.
+
+    Before, the damped phase counted from the fault's stamp: a stamp 10 s back left the
+    stop undamped from its second period (the arm moving at 0.3 rad/s travelled 36 mrad,
+    22 with the damping), and a stop before the first sample (Ctrl-C in the warm-up)
+    counted from t = 0, undamped at once on a robot whose clock reads 1.7e9 s.
+    """
+    qd, start = np.full(N, 0.3), 1.7e9
+    if when == "a stamp from the past":
+        for k in range(3):
+            assert sup.check(start + k * DT, MID, qd)
+        assert not sup.check(start - 10.0, MID, qd)
+    else:
+        sup.stop("interrupted by the operator (Ctrl-C)")
+    damping = np.diag(dyn.mass(MID)) / sup.parameters.braking_time
+    damped = np.clip(dyn.gravity(MID) - damping * qd, -LIMIT, LIMIT)
+    for k in range(3, 10):  # the robot's clock goes on as before
+        sup.check(start + k * DT, MID, qd)
+        np.testing.assert_allclose(sup.command(start + k * DT, MID, qd, np.zeros(N)), damped)
+
+
+@pytest.mark.parametrize("rate", [0.0, -1.0])
+def test_a_clock_that_stops_or_runs_backwards_is_a_fault(sup, rate):
+    """Stamps that repeat, or go back 4 ms a period: a fault once max_time_gap has passed.
+
+    Each stamp compared with the one before passed: a controller fed a stopped clock
+    calibrated for good, the arm held by the calibration's first reference, no event.
+    """
+    gap = sup.parameters.max_time_gap
+    periods = round(gap / DT)
+    for k in range(periods + 2):
+        good = sup.check(5.0 + rate * k * DT, MID, np.zeros(N))
+        if not good:
+            break
+    assert periods - 2 <= k <= periods + 1
+    assert sup.state is SupervisorState.FAULT
+    reason = sup.fault_reason
+    assert "the robot's clock stopped or runs backwards" in reason or "stepped back" in reason
+
+
+def test_a_coarse_clock_that_repeats_stamps_is_no_fault(sup):
+    """A clock with 10 ms resolution at 250 Hz repeats stamps 2–3 times: taken as it is."""
+    for k in range(200):
+        assert sup.check(0.01 * math.floor(k * DT / 0.01), MID, np.zeros(N))
+
+
+def test_the_safe_stop_holds_with_the_gravity_the_calibration_measured(sup, dyn):
+    """correct_gravity(scale, offset): the hold is scale · G(q) + offset, as the controller's."""
+    scale, offset = np.full(N, 0.9), np.linspace(-0.2, 0.2, N)
+    sup.correct_gravity(scale, offset)
+    assert sup.check(0.0, MID, np.zeros(N))
+    sup.stop("test")
+    held = [sup.command(DT * (1 + k), MID, np.zeros(N), np.zeros(N)) for k in range(200)]
+    expected = np.clip(scale * dyn.gravity(MID) + offset, -LIMIT, LIMIT)
+    np.testing.assert_allclose(held[0], expected)
+    np.testing.assert_allclose(held[-1], expected)
 
 
 def test_fault_stays_latched_until_reset(sup):

@@ -124,6 +124,9 @@ class LeadThrough:
         self._gravity_std = parameters.gravity_std  # [–], a property: read once
         self._ripple_share = parameters.torque_ripple / math.sqrt(2.0)  # [–] (joint_std)
         self.robot = robot
+        #: the description with the payload :meth:`set_payload` gave: what :meth:`reset`
+        #: and the calibration build on
+        self._carrying = robot
         self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
         #: which joints' friction levels were measured on this arm: all of a given model's
         self._identified = np.full(robot.n_joints, friction is not None)
@@ -341,7 +344,8 @@ class LeadThrough:
 
         A latched fault is cleared too; the calibration runs again if asked for.
         """
-        self._build(self.robot, self.nominal_friction)
+        self._build(self._carrying, self.nominal_friction)
+        self.supervisor.correct_gravity(None, None)
         self.supervisor.reset()
         self.supervisor.teach()
         p = self.parameters
@@ -387,13 +391,15 @@ class LeadThrough:
         The feed-forward, the observer and the supervisor all switch to the same model;
         the filters restart (do it while the arm rests). This payload replaces the one a
         start-up calibration weighed; its :attr:`gravity_correction` (what the payload
-        did not explain) is kept.
+        did not explain) is kept. :meth:`reset` keeps the payload too, and a calibration
+        after it weighs only what the arm carries beyond it.
 
         Args:
             mass: Payload mass [kg], >= 0.
             com: Its centre of mass in the flange frame [m].
         """
-        self._build(self.robot.with_payload(mass, com), self.friction, self._friction_measured)
+        self._carrying = self.robot.with_payload(mass, com)
+        self._build(self._carrying, self.friction, self._friction_measured)
 
     def warm_up(self) -> float:
         """Compile every kernel the step will call, on replicas of this controller.
@@ -467,10 +473,16 @@ class LeadThrough:
                 ``measurement_delay`` steps ago stands for it.
 
         An exception inside the step latches the supervisor's fault, naming the exception
-        and the component it came from, and the safe stop is returned this period.
+        and the component it came from, and the safe stop is returned this period; so
+        does a sample that cannot be read (``step(q)`` without q̇).
         """
-        stamp, q, qd, tau_measured = self._sample(q, qd, tau_measured)
         supervisor = self.supervisor
+        try:
+            stamp, q, qd, tau_measured = self._sample(q, qd, tau_measured)
+        except Exception as error:  # no readings to trust: hold the last good position
+            supervisor.stop(failure("sample", error))
+            zeros = np.zeros(self.robot.n_joints)
+            return self._send(supervisor.command(None, zeros, zeros * np.nan, zeros), zeros)
         if not supervisor.check(stamp, q, qd, tau_measured):  # the time stamp too
             zeros = np.zeros(self.robot.n_joints)
             return self._send(supervisor.command(stamp, q, qd, zeros), zeros)
@@ -590,10 +602,10 @@ class LeadThrough:
         if not calibration.accepted:
             friction = calibration.friction(self.nominal_friction)
             if friction is not self.nominal_friction:
-                self._build(self.robot, friction, self._identified)
+                self._build(self._carrying, friction, self._identified)
                 self.level_error = self._identified_level_error()  # the wider errors
             return
-        robot = calibration.robot(self.robot)
+        robot = calibration.robot(self._carrying)
         accuracy = self.parameters.calibration.friction_accuracy  # type: ignore[union-attr]
         # the joints that slid at pace long enough: their friction level and gravity were
         # measured; on the others (stiction held them, or they stick-slipped) the level and
@@ -615,6 +627,7 @@ class LeadThrough:
         share = np.where(known, share, 0.0)
         self._gravity_scale = 1.0 - share
         self._gravity_offset = share * gravity - bias
+        self.supervisor.correct_gravity(self._gravity_scale, self._gravity_offset)
         # where the gravity is known: at the pose on the joints measured (reference 0
         # elsewhere)
         measured_gravity = gravity - bias

@@ -90,7 +90,11 @@ def tool_braking(
 
 
 def safe_stop(
-    dynamics: Dynamics, q: FloatArray, qd: FloatArray | None, braking_time: float
+    dynamics: Dynamics,
+    q: FloatArray,
+    qd: FloatArray | None,
+    braking_time: float,
+    gravity: FloatArray | None = None,
 ) -> FloatArray:
     """Gravity hold at ``q``, damped against ``qd`` when given; zero where non-finite.
 
@@ -99,11 +103,12 @@ def safe_stop(
         q: The position to hold [rad], shape (n,).
         qd: Trusted joint velocities to damp [rad/s], shape (n,), or None (no damping).
         braking_time: The damping is ``M_ii / braking_time`` [s].
+        gravity: The gravity torque to hold with at ``q`` [Nm] (default the model's G(q)).
 
     Returns:
         The hold torque [Nm], not yet saturated.
     """
-    tau = dynamics.gravity(q)
+    tau = dynamics.gravity(q) if gravity is None else np.asarray(gravity, dtype=float)
     if qd is not None:
         damping = dynamics.mass(q).diagonal() / braking_time
         tau = tau - damping * qd

@@ -74,10 +74,12 @@ def time_problem(t: object, previous: float | None, max_gap: float | None) -> st
 
     Args:
         t: The time stamp [s].
-        previous: The previous sample's [s] (None: none since the start or a reset).
-        max_gap: The longest a sample may come after the one before, or before it [s]
+        previous: The latest sample's [s] (None: none since the start or a reset).
+        max_gap: The longest a sample may come after the latest, or before it [s]
             (``SafetyParameters.max_time_gap``; None: any). A stamp that repeats or goes
-            back by less is taken as it is (a driver's clock may be coarse).
+            back by less is taken as it is (a driver's clock may be coarse): compared
+            with the latest, a clock that runs backwards slowly is a fault once it is
+            ``max_gap`` behind (:func:`clock_stopped` for one that stops).
     """
     value = seconds(t)
     if value is None:
@@ -93,6 +95,25 @@ def time_problem(t: object, previous: float | None, max_gap: float | None) -> st
                 f"{value:.6f} s (more than max_time_gap {max_gap:g} s): the robot's clock "
                 "was reset")  # fmt: skip
     return None
+
+
+def clock_stopped(stalled: int, dt: float, max_gap: float | None) -> str | None:
+    """Why the robot's clock cannot be trusted: no later stamp for ``max_gap`` of periods.
+
+    Args:
+        stalled: Samples in a row whose stamp did not come after the latest one.
+        dt: The control period [s].
+        max_gap: ``SafetyParameters.max_time_gap`` [s] (None: never).
+
+    A stamp may repeat (a coarse clock), but a clock that stops, or runs backwards, for
+    ``max_gap`` leaves everything timed by it (the calibration, the dither) still: before,
+    a controller fed a constant stamp calibrated for good, with no event.
+    """
+    if max_gap is None or stalled * dt <= max_gap:
+        return None
+    return (f"time stamp did not advance over {stalled} samples ({stalled * dt:.3g} s of "
+            f"periods, more than max_time_gap {max_gap:g} s): the robot's clock stopped or "
+            "runs backwards")  # fmt: skip
 
 
 def sample_reason(

@@ -41,6 +41,7 @@ from leadthrough.safety.checks import (
     OUT_OF_RANGE,
     FrozenEncoders,
     as_floats,
+    clock_stopped,
     command_problem,
     floats,
     in_range,
@@ -113,8 +114,11 @@ class SafetySupervisor:
         self.overruns = 0
         self.max_tool_speed = 0.0
         self._t = 0.0  # the latest finite time stamp [s]
-        self._t_checked: float | None = None  # the last checked sample's (None: none yet)
-        self._fault_time = 0.0
+        self._t_checked: float | None = None  # the latest checked stamp (None: none yet)
+        self._stalled = 0  # samples since a checked stamp last came after the latest
+        self._stop_periods = 0  # periods of the safe stop sent since the fault
+        self.gravity_scale: FloatArray | None = None  # a measured correction of G (see
+        self.gravity_offset: FloatArray | None = None  # correct_gravity)
         self._q_last_good: FloatArray | None = None
         self._in_overrun = False
         p = self.parameters
@@ -151,6 +155,17 @@ class SafetySupervisor:
         """Switch to HOLDING; ignored while in FAULT."""
         self._set_mode(SupervisorState.HOLDING)
 
+    def correct_gravity(self, scale: FloatArray | None, offset: FloatArray | None) -> None:
+        """Hold the arm in a safe stop with ``scale · G(q) + offset`` [–, Nm] (None: G(q)).
+
+        The gravity the controller holds the arm with once a start-up calibration measured
+        its error (``LeadThrough.gravity_correction``): the safe stop holds it with the
+        same, not with the model the calibration found off (on a UR10e whose masses were
+        15 % heavier than modelled, 5.5 Nm on shoulder and elbow).
+        """
+        self.gravity_scale = None if scale is None else np.array(scale, dtype=float)
+        self.gravity_offset = None if offset is None else np.array(offset, dtype=float)
+
     def stop(self, reason: str, t: float | None = None) -> None:
         """Latch FAULT with ``reason`` from outside (Ctrl-C, a robot error): the safe stop.
 
@@ -159,8 +174,7 @@ class SafetySupervisor:
         Args:
             reason: One line saying what happened.
             t: Time of the sample the fault belongs to [s], on the robot's clock; default
-                the time of the latest sample seen. The damped phase of the safe stop
-                counts from it.
+                the time of the latest sample seen (the event's time).
         """
         if t is not None:
             self._clock(t)
@@ -180,7 +194,7 @@ class SafetySupervisor:
         self.state = SupervisorState.HOLDING
         self.fault_reason = None
         self._q_last_good = None
-        self._t_checked = None
+        self._t_checked, self._stalled = None, 0
         self._clear_episodes()
         self._log("reset", "supervisor reset: holding")
 
@@ -191,7 +205,9 @@ class SafetySupervisor:
 
         Args:
             t: Time of the sample [s]: a finite number, at most ``max_time_gap`` after the
-                previous sample's (:func:`~.checks.time_problem`), else a fault.
+                latest sample's and not more than that before it
+                (:func:`~.checks.time_problem`), else a fault; so is a clock that stops
+                (:func:`~.checks.clock_stopped`).
             q: Joint readings [rad], shape (n,).
             qd: Joint velocities [rad/s], shape (n,).
             tau_measured: Measured joint torques, arm side [Nm], shape (n,), or None.
@@ -200,9 +216,8 @@ class SafetySupervisor:
             True when the sample is good and no fault is latched.
         """
         try:
-            late = time_problem(t, self._t_checked, self.parameters.max_time_gap)
+            late = self._time_problem(t)
             self._clock(t)
-            self._t_checked = self._t
             position, velocity = floats(q), as_floats(qd)  # q is kept: a copy
             tau = None if tau_measured is None else as_floats(tau_measured)
             limits, count = self._limits, OUT_OF_RANGE
@@ -223,6 +238,23 @@ class SafetySupervisor:
             self._fault(problem)
             return False
         return self.state is not SupervisorState.FAULT
+
+    def _time_problem(self, t: object) -> str | None:
+        """Why the stamp ``t`` cannot be used, or None; keeps the latest stamp.
+
+        :func:`~.checks.time_problem` against the latest stamp, and
+        :func:`~.checks.clock_stopped`.
+        """
+        gap = self.parameters.max_time_gap
+        problem = time_problem(t, self._t_checked, gap)
+        value = seconds(t)
+        if value is None:
+            return problem
+        if self._t_checked is None or value > self._t_checked:
+            self._t_checked, self._stalled = value, 0
+        else:
+            self._stalled += 1
+        return problem or clock_stopped(self._stalled, self.dt, gap)
 
     def command(
         self,
@@ -338,15 +370,26 @@ class SafetySupervisor:
             self._log("tool_speed", f"tool speed {speed:.3g} m/s above {limit:.3g} m/s: braking")
 
     def _safe_stop(self, qd: object) -> FloatArray:
-        """Gravity hold at the last good position, damped for the first part of the stop."""
+        """Gravity hold at the last good position, damped for the first part of the stop.
+
+        The damped part is the stop's first ``safe_stop_damping_time`` of periods, counted
+        as they are sent: not by the robot's clock, which a fault may be about (a stamp
+        from the past, or a Unix clock when the stop comes before the first sample, left
+        the stop undamped from its first or second period).
+        """
         p = self.parameters
+        damped = self._stop_periods * self.dt < p.safe_stop_damping_time
+        self._stop_periods += 1
         try:
             if self._q_last_good is None:  # no valid position ever read: nothing to hold
                 return np.zeros(self.n)
-            damped = self._t - self._fault_time < p.safe_stop_damping_time
             frozen = self._encoders.frozen()
             velocity = trusted_velocity(qd, self._limits.qd_bound, frozen) if damped else None
-            hold = braking.safe_stop(self.dynamics, self._q_last_good, velocity, p.braking_time)
+            q = self._q_last_good
+            gravity = self.dynamics.gravity(q)
+            if self.gravity_scale is not None and self.gravity_offset is not None:
+                gravity = self.gravity_scale * gravity + self.gravity_offset
+            hold = braking.safe_stop(self.dynamics, q, velocity, p.braking_time, gravity)
             return self._limits.saturated(hold)
         except Exception as error:  # the last resort must return a torque: zero, and say so
             if self._log_book.began("safe_stop_failed", True):
@@ -386,11 +429,7 @@ class SafetySupervisor:
         self._log("mode", f"mode {mode.value}")
 
     def _clock(self, t: object) -> None:
-        """Take ``t`` as the latest time [s] if it is a finite number; else keep the last.
-
-        The safe stop's damped phase counts from the fault's time: a NaN there left it
-        undamped for good (every comparison False), an Inf damped for good.
-        """
+        """Take ``t`` as the latest time [s] if it is a finite number; else keep the last."""
         value = seconds(t)
         if value is not None:
             self._t = value
@@ -401,7 +440,7 @@ class SafetySupervisor:
             return
         self.state = SupervisorState.FAULT
         self.fault_reason = reason
-        self._fault_time = self._t
+        self._stop_periods = 0
         self._log("fault", reason)
 
     def _log(self, kind: str, detail: str) -> None:

@@ -102,7 +102,7 @@ def simulate(
 
     try:
         report = control_loop(observed, controller, duration, after_period=record,
-                              wall_clock=False)  # fmt: skip
+                              wall_clock=False, hold_at_end=False)  # fmt: skip
     finally:
         bar.close()
     if report.interrupted:  # the arm was stopped safely; a partial run is no result
