@@ -172,7 +172,7 @@ def bad_arguments(draw) -> list[str]:
         "inspect": [["missing.csv"], ["garbage.csv"], ["adir"], ["yumi.csv"],
                     ["taught.mcap", *robot], ["taught.mcap", *out_dir], ["taught.mcap", *unknown],
                     ["taught.mcap", "--friction", "missing.toml"],
-                    ["taught.mcap", "--friction", "afile"], ["cut.mcap"]],
+                    ["taught.mcap", "--friction", "afile"], ["cut.mcap", "--robot", "ur10e"]],
     }[command]  # fmt: skip
     option = draw(st.sampled_from(bad))
     if draw(st.booleans()) and option[0].startswith("--") and len(option) == 2:
@@ -346,9 +346,24 @@ def test_closed_stdout_ends_quietly():
 @pytest.mark.parametrize(
     "argv",
     [["inspect", "missing.csv"], ["inspect", "garbage.csv"], ["inspect", "adir"],
-     ["inspect", "taught.mcap", "--robot", "ur10e"], ["inspect", "cut.mcap"]],
+     ["inspect", "taught.mcap", "--robot", "ur10e"], ["inspect", "cut.mcap", "--robot", "ur10e"],
+     ["inspect", "taught.mcap", "--robot", "panda"],
+     ["inspect", "taught.mcap", "--friction", "ur10e_friction.toml"]],
     ids=" ".join,
 )  # fmt: skip
 def test_inspect_mistakes_are_one_line(workdir, argv):
-    """inspect: a missing, unreadable, garbage or wrong-robot log is one line and exit 2."""
+    """inspect: a missing, unreadable, garbage or wrong-robot log is one line and exit 2.
+
+    A YuMi recording inspected as a Panda (seven joints too) read 42.7 Nm "contacts";
+    a UR10e's friction file on it ended in a broadcasting traceback.
+    """
+    lt.FrictionModel.from_robot(lt.robots.ur10e()).save(workdir / "ur10e_friction.toml")
     assert_one_line_error(*run(argv, workdir)[::2])
+
+
+@pytest.mark.parametrize("command", ["inspect", "replay"])
+def test_a_pipe_is_not_read_as_a_log(tmp_path, command):
+    """A FIFO given as the log: one line at once (it waited for a writer for good)."""
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)
+    assert_one_line_error(*run([command, str(fifo)], tmp_path)[::2])

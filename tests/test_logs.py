@@ -165,6 +165,26 @@ def test_an_excitation_npz_drops_and_counts_its_nan_rows_as_the_csv_does(tmp_pat
     assert loaded["dropped_rows"] == 2 and np.all(np.isfinite(loaded["q"]))
 
 
+@pytest.mark.parametrize("suffix", [".csv", ".npz"])
+def test_an_excitation_log_drops_its_implausible_rows_as_the_robot_logs_do(tmp_path, suffix):
+    """A torque of 1e300, an angle of 1000 rad, one off its path: dropped, counted, warned.
+
+    Before, only non-finite rows were: the torque ended the fit in a traceback, and the
+    angle was fitted (joint 1's level 1.50 → 7.77 Nm), silently.
+    """
+    from leadthrough.friction.logs import load_logs, save_logs
+
+    t = np.arange(200) * 0.004
+    q = np.column_stack([np.sin(t), 0.5 * np.cos(t)])
+    run = {"t": t, "q": q, "qd": np.gradient(q, t, axis=0), "tau": np.ones((200, 2))}
+    run["tau"][30, 0], run["q"][60, 1], run["q"][90, 0] = 1e300, 1000.0, q[90, 0] + 0.5
+    path = save_logs([run], tmp_path / f"mine{suffix}")
+    with pytest.warns(LogWarning, match=r"dropped 3 of 200 rows as corrupted \(rows 31, 61, 91\)"):
+        (loaded,) = load_logs(path)
+    assert loaded["dropped_rows"] == 3 and np.max(np.abs(loaded["tau"])) == 1.0
+    assert np.max(np.abs(loaded["q"])) <= 1.0
+
+
 @pytest.mark.parametrize("keep", [0.0, 0.5], ids=["empty", "truncated"])
 def test_a_truncated_or_empty_npz_is_a_log_error_naming_it(tmp_path, keep):
     """An .npz cut short (or empty) is a one-line LogError naming the file, no traceback."""
@@ -197,9 +217,15 @@ def test_a_cut_or_unfinished_recording_reads_with_a_warning_saying_how_much(tmp_
         assert 0 < lt.read_log(cut).n_samples < 500
 
 
-@pytest.mark.parametrize(("divided", "says"), [(60.0, "60× too fast"), (1000.0, "1000× too fast")])
+@pytest.mark.parametrize(
+    ("divided", "says"),
+    [(60.0, "60× too fast"), (1000.0, "1000× too fast"), (0.2, "5× too slow")],
+)
 def test_a_log_whose_clock_runs_too_fast_for_its_velocities_is_refused(tmp_path, divided, says):
-    """Time divided by 60 or 1000 (``inspect`` read "6000 Hz"): dq/dt is 60× q̇, one line."""
+    """Time divided by 60 or 1000 (``inspect`` read "6000 Hz"): dq/dt is 60× q̇, one line.
+
+    Stretched 5× (``inspect`` found two contacts in a log of free motion), it is a fifth.
+    """
     table = _ur_rows(200, 31)
     assert lt.read_log(_write(tmp_path / "s.csv", table)).n_samples == 200  # in seconds: read
     table[:, 0] /= divided

@@ -129,6 +129,26 @@ def test_identify_on_a_log_where_nothing_moves_writes_nothing(tmp_path, capsys):
     assert not (tmp_path / "id" / "friction.toml").exists()
 
 
+def test_identify_with_an_unreadable_held_out_log_writes_nothing(tmp_path, capsys):
+    """A held-out log that cannot be read: one line, and the output folder as it was.
+
+    Before, the held-out logs were read after the friction figure was written: a folder
+    of an earlier run then held the new figure beside the old report and models.
+    """
+    from tests.test_logs import _ur_rows, _write
+
+    runs = [_write(tmp_path / f"run{k}.csv", _ur_rows(400, t0=10.0 * k)) for k in range(2)]
+    _write(tmp_path / "held_out.csv", _ur_rows(400)[::-1])  # time runs back: rows corrupted
+    out = tmp_path / "id"
+    out.mkdir()
+    (out / "report.md").write_text("an earlier run's\n")
+    argv = ["identify", "--robot", "ur10e", "--log", *map(str, runs), "--held-out",
+            str(tmp_path / "held_out.csv"), "--out", str(out)]  # fmt: skip
+    assert main(argv) == 2
+    assert "held_out.csv" in capsys.readouterr().err
+    assert [path.name for path in out.iterdir()] == ["report.md"]
+
+
 def test_identify_names_the_joints_it_could_not_identify(tmp_path, capsys):
     """Only joint 1 moved: it is fitted and plotted; joints 2–7 are named as not identified."""
     log = excitation_log(tmp_path / "one.csv", moving=(0,))
@@ -186,6 +206,24 @@ def test_a_fault_while_teaching_is_not_silent(tmp_path, monkeypatch):
         summary = teach.teach_on_twin(lt.robots.yumi(), tmp_path / "t.mcap", duration=0.8,
                                       friction_file=None)  # fmt: skip
     assert "supervisor fault" in summary
+
+
+def test_a_session_that_records_nothing_leaves_no_file(tmp_path, monkeypatch):
+    """A fault in the start-up calibration: nothing taught, the error says so, no file.
+
+    Before, an empty recording stayed, and the next ``teach --out`` to it was refused as
+    "exists (a recording)".
+    """
+    from leadthrough.control.calibration import CalibrationRun
+
+    def failing(self, t, q, qd):
+        raise IndexError("injected")
+
+    monkeypatch.setattr(CalibrationRun, "command", failing)
+    out = tmp_path / "t.mcap"
+    with pytest.raises(RecordingError, match=r"nothing was taught or recorded.*no file written"):
+        teach.teach_on_twin(lt.robots.yumi(), out, duration=0.2, friction_file=None)
+    assert not out.exists() and not list(tmp_path.iterdir())
 
 
 def test_damaged_recording_counts_the_taught_span_not_the_events(tmp_path):

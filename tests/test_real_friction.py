@@ -9,7 +9,12 @@ import pytest
 from tests.realdata import REALDATA, needs_realdata
 
 import leadthrough as lt
-from leadthrough.experiments.real_friction import friction_table, panda_friction, ur10e_friction
+from leadthrough.experiments.real_friction import (
+    friction_table,
+    panda_friction,
+    published_value,
+    ur10e_friction,
+)
 from leadthrough.friction.along_travel import level_along_travel
 from leadthrough.friction.identification import (
     MIN_LEVEL,
@@ -17,6 +22,7 @@ from leadthrough.friction.identification import (
     fit_friction,
     friction_samples,
 )
+from leadthrough.logs.rows import LogError
 
 #: Our residual may exceed the published model's by this factor at most. Ours is fitted by
 #: least squares to these very samples with at least the published model's freedom (minus
@@ -273,3 +279,16 @@ def test_coulomb_level_is_never_fitted_negative(ur10e_dynamics):
     model, _ = fit_friction(samples, ur10e_dynamics, joints=[0])
     assert model.coulomb[0] == pytest.approx(0.0, abs=1e-9)
     assert model.viscous[0] > 0.0
+
+
+@pytest.mark.parametrize("text", ["{", "{}", "[1, 2]"])
+def test_a_malformed_published_identification_is_one_line(tmp_path, text):
+    """A published JSON that is not one: one line naming the file (no real data needed).
+
+    Before, a broken file ended in a JSONDecodeError, one without the key in StopIteration.
+    """
+    (tmp_path / "published_identification.json").write_text(text, encoding="utf-8")
+    with pytest.raises(LogError) as error:
+        published_value(tmp_path, "linear_friction")
+    message = str(error.value)
+    assert "\n" not in message and "published_identification.json" in message

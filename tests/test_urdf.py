@@ -333,6 +333,55 @@ def test_a_malformed_joint_or_link_is_named(tmp_path, old, new, field, reason):
     assert str(error) == f"{path}: {field}: {reason}"
 
 
+LOOPING = """  <joint name="back" type="fixed">
+    <parent link="link2"/>
+    <child link="link1"/>
+  </joint>
+</robot>"""
+
+
+@pytest.mark.parametrize(
+    ("change", "reason"),
+    [
+        pytest.param(("</robot>", LOOPING),
+                     "is the child of joints 'hinge' and 'back': a URDF is a tree, each link "
+                     "has one parent", id="two-parents"),
+        pytest.param(('<parent link="base"/>', '<parent link="link2"/>'),
+                     "link 'link1': is on a loop of joints, not below the root link 'base'",
+                     id="loop"),
+        pytest.param(('<link name="base"/>', '<link name="base"/>\n  <link name="stray"/>'),
+                     "the joints join the links into 2 trees, not one (root links: 'base', "
+                     "'stray')", id="two-roots"),
+    ],
+)  # fmt: skip
+def test_joints_that_do_not_make_one_tree_are_named(tmp_path, change, reason):
+    """A link with two parents, a loop, a second root: one line, not Pinocchio's crash.
+
+    Before, a link that was the child of two joints crashed the process inside Pinocchio
+    (a segmentation fault, nothing printed); a loop gave urdfdom's lines on stderr and
+    "not a valid URDF".
+    """
+    path = tmp_path / "arm.urdf"
+    path.write_text(HINGES.replace(*change), encoding="utf-8")
+    assert reason in str(_error(path))
+
+
+def test_a_joint_of_the_arm_that_mimics_another_is_refused(robots_dir, tmp_path):
+    """The shipped Panda with joint 3 mimicking joint 2: refused, naming both; a finger may.
+
+    Before, it loaded as seven independent joints, silently.
+    """
+    text = (Path(lt.robots.__file__).parent / "data" / "panda.urdf").read_text(encoding="utf-8")
+    joint3 = text.index('<joint name="panda_joint3"')
+    end = text.index("</joint>", joint3)
+    path = tmp_path / "panda.urdf"
+    path.write_text(text[:end] + '<mimic joint="panda_joint2"/>' + text[end:], encoding="utf-8")
+    error = _error(path, tip="panda_hand")
+    assert "joint 'panda_joint3'" in str(error) and "mimics 'panda_joint2'" in str(error)
+    assert "<mimic" in text  # the shipped file's finger mimics the other finger: it loads
+    lt.robots.from_urdf(Path(lt.robots.__file__).parent / "data" / "panda.urdf", tip="panda_hand")
+
+
 def test_a_malformed_limit_of_the_shipped_panda_names_its_joint(tmp_path):
     """The shipped Panda with joint 3's effort not a number: its joint and value named."""
     text = (Path(lt.robots.__file__).parent / "data" / "panda.urdf").read_text(encoding="utf-8")

@@ -94,7 +94,9 @@ def test_no_kernel_compiles_inside_the_loop_after_the_warm_up():
             controller.step(home, np.zeros(robot.n_joints), None)
         simulate(DigitalTwin(robot), replayer, 0.5, progress=False)
         after = compiled.signatures()
-        new = {name: after[name] for name in after if after[name] != before[name]}
+        # the controller's kernels: the twin's (the plant, not on a robot) compile as it runs
+        new = {name: after[name] for name in after
+               if after[name] != before[name] and not name.startswith("leadthrough.twin.")}
         assert any(before.values()), "nothing was compiled by the warm-up"
         print("NEW", new)
         """
@@ -126,3 +128,28 @@ def test_a_compiled_kernel_replaces_its_wrapper_in_the_package():
     bound(estimate, std, jacobian, other, 1e-4, again, again_std, np.zeros((3, 8)))
     np.testing.assert_array_equal(again, mean)
     assert bound.py_func is wrapper.py_func
+
+
+def test_a_kernel_compiles_where_numba_cannot_cache(monkeypatch):
+    """No folder numba may cache in (a read-only install, no HOME): compiled all the same.
+
+    Before, numba's "cannot cache function" ended every command, ``--help`` included.
+    """
+    import numba
+
+    from leadthrough.compiled import kernel
+
+    njit = numba.njit
+
+    def no_cache(*args, **kwargs):
+        if kwargs.get("cache"):
+            raise RuntimeError("cannot cache function 'twice': no locator available")
+        return njit(*args, **kwargs)
+
+    monkeypatch.setattr(numba, "njit", no_cache)
+
+    @kernel
+    def twice(x):
+        return 2.0 * x
+
+    assert twice(1.5) == 3.0 and twice.compiled_signatures()

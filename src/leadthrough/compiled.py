@@ -31,7 +31,7 @@ def kernel(function: Callable[..., Any]) -> Callable[..., Any]:
         if kernel is None:
             import numba  # at the first call: numba takes ~0.5 s to import
 
-            kernel = numba.njit(cache=True)(function)
+            kernel = _compiled(numba, function)
             _bind(call, kernel)
         return kernel(*args)
 
@@ -43,6 +43,19 @@ def kernel(function: Callable[..., Any]) -> Callable[..., Any]:
     call.__doc__, call.__name__ = function.__doc__, function.__name__
     _KERNELS[f"{function.__module__}.{function.__qualname__}"] = call
     return call
+
+
+def _compiled(numba: Any, function: Callable[..., Any]) -> Callable[..., Any]:
+    """``numba.njit(cache=True)(function)``, or without the disk cache where there is none.
+
+    numba caches beside the module (``__pycache__``) or in the user's cache folder; an
+    install that may write neither (read-only, no HOME) made every command fail
+    ("cannot cache function"), ``--help`` included. It then compiles in each process.
+    """
+    try:
+        return numba.njit(cache=True)(function)  # type: ignore[no-any-return]
+    except RuntimeError:  # no cache locator: nowhere to write the cache
+        return numba.njit(function)  # type: ignore[no-any-return]
 
 
 def _bind(wrapper: Callable[..., Any], dispatcher: Callable[..., Any]) -> None:

@@ -133,6 +133,8 @@ def existing_file(text: str) -> Path:
         raise argparse.ArgumentTypeError(f"{text}: no such file")
     if path.is_dir():
         raise argparse.ArgumentTypeError(f"{text} is a directory, not a file")
+    if not path.is_file():  # a pipe waits for a writer, a device never ends
+        raise argparse.ArgumentTypeError(f"{text} is not a regular file (a pipe, a device?)")
     return path
 
 
@@ -143,16 +145,24 @@ def existing_log(text: str) -> Path:
         raise argparse.ArgumentTypeError("expected a log file, got an empty name")
     if not path.exists():
         raise argparse.ArgumentTypeError(f"{text}: no such file or folder")
+    if not (path.is_file() or path.is_dir()):  # a pipe waits for a writer, a device never ends
+        raise argparse.ArgumentTypeError(f"{text} is not a regular file or a folder (a pipe, "
+                                         "a device?)")  # fmt: skip
     return path
 
 
-def add_robot_arguments(parser: argparse.ArgumentParser, default: str = "yumi") -> None:
-    """``--robot``, ``--tip`` and ``--drive-data``: the arm a command works on."""
+def add_robot_arguments(
+    parser: argparse.ArgumentParser, default: str | None = "yumi", shown: str | None = None
+) -> None:
+    """``--robot``, ``--tip`` and ``--drive-data``: the arm a command works on.
+
+    ``default`` None leaves the choice to the command (``shown`` says what it is).
+    """
     from leadthrough.model import robots
 
     parser.add_argument("--robot", default=default, metavar="NAME|FILE",
                         help=f"shipped robot ({', '.join(robots.names())}) or a .toml/.urdf "
-                             f"description (default: {default})")  # fmt: skip
+                             f"description (default: {shown or default})")  # fmt: skip
     parser.add_argument("--tip", help="flange link of a URDF (needed when the tree branches)")
     parser.add_argument("--drive-data", type=existing_file, metavar="FILE",
                         help="drive data TOML of a URDF: gear ratios, rotor inertias, torque "

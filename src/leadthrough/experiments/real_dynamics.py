@@ -16,14 +16,13 @@ the same regressor the identification uses.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
-from leadthrough.experiments.real_friction import quietly, ur10e_friction
+from leadthrough.experiments.real_friction import published_value, quietly, ur10e_friction
 from leadthrough.friction.model import FrictionModel
 from leadthrough.identification.dynamics import DynamicsReport, DynamicsSettings, identify_dynamics
 from leadthrough.identification.prediction import gain_ratio, prediction_error, rms
@@ -108,9 +107,8 @@ def published_parameters(description: Path, nominal: RobotDescription) -> FloatA
     model = pin.buildModelFromUrdf(str(description / "ur10e_published_identification.urdf"))
     n = nominal.n_joints
     inertial = np.concatenate([model.inertias[i + 1].toDynamicParameters() for i in range(n)])
-    table = json.loads((description / "published_identification.json").read_text())
-    armature = next(v for k, v in table.items() if k.startswith("rotor_inertia"))
-    linear = np.array(next(v for k, v in table.items() if k.startswith("linear_friction")))
+    armature = published_value(description, "rotor_inertia")
+    linear = np.array(published_value(description, "linear_friction"))
     return np.concatenate([inertial, armature, linear[:, 1], linear[:, 0], linear[:, 2]])
 
 

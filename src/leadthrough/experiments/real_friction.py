@@ -24,6 +24,7 @@ import numpy as np
 from leadthrough.friction.identification import FitReport, fit_friction, friction_samples
 from leadthrough.friction.model import FrictionModel, sigmoid
 from leadthrough.logs.log import JointLog
+from leadthrough.logs.rows import LogError
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.runtime.readers import read_log
@@ -100,6 +101,27 @@ def identify_joint(log: JointLog, robot: RobotDescription, joint: int) -> tuple:
             samples.tau_friction[mine, joint])  # fmt: skip
 
 
+def published_value(description: Path, prefix: str) -> list:
+    """The value of the first key starting with ``prefix`` in the published JSON.
+
+    ``description/published_identification.json`` of ``../shared/realdata/ur10e``.
+
+    Raises:
+        LogError: One line naming the file: it cannot be read, is not JSON, or has no
+            such key (a malformed file ended in a JSONDecodeError or StopIteration).
+    """
+    path = description / "published_identification.json"
+    try:
+        table = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise LogError(f"{path}: cannot read the published identification ({error})") from None
+    found = [value for key, value in table.items() if key.startswith(prefix)] if isinstance(
+        table, dict) else []  # fmt: skip
+    if not found:
+        raise LogError(f"{path}: no {prefix}* entry: not the published identification")
+    return found[0]
+
+
 def ur10e_friction(
     folder: str | Path, robot: RobotDescription | None = None
 ) -> list[JointFriction]:
@@ -108,8 +130,7 @@ def ur10e_friction(
 
     folder = Path(folder) / "ur10e"
     robot = robot or quietly(ur10e)
-    table = json.loads((folder / "description" / "published_identification.json").read_text())
-    linear = next(value for key, value in table.items() if key.startswith("linear_friction"))
+    linear = published_value(folder / "description", "linear_friction")
     rows = []
     for j in range(robot.n_joints):
         log = quietly(read_log, folder / "jointwise" / f"ur-20_01_22-joint_{j + 1}.csv", robot)

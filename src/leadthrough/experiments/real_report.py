@@ -77,9 +77,14 @@ def write_realdata_report(folder: Path, out: Path) -> str:
 def write_logs_report(
     robot: RobotDescription, logs: Sequence[Path], held_out: Sequence[Path], out: Path
 ) -> str:
-    """Friction and dynamics of ``robot`` from ``logs``, judged on ``held_out`` logs."""
-    out.mkdir(parents=True, exist_ok=True)
+    """Friction and dynamics of ``robot`` from ``logs``, judged on ``held_out`` logs.
+
+    Every log is read and every fit and prediction made before anything is written: a
+    log that cannot be read leaves ``out`` as it was (a held-out log was read after the
+    friction figure had been written, beside an earlier run's report).
+    """
     fitted = [_users_log(path, robot) for path in logs]
+    judged = [(path, _users_log(path, robot)) for path in held_out]
     dynamics = Dynamics(robot)
     samples = friction_samples(fitted, dynamics)
     try:
@@ -87,6 +92,9 @@ def write_logs_report(
     except IdentificationError as error:  # about every run together: name them
         raise IdentificationError(f"{', '.join(map(str, logs))}: {error}") from None
     identified, report = identify_dynamics(fitted, robot, friction)
+    predictions = [(path, log, {"nominal": prediction_error(log, robot),
+                                "ours": prediction_error(log, identified, report.offset)})
+                   for path, log in judged]  # fmt: skip
     missing = friction_report.not_identified_note()
     if missing:
         warnings.warn(missing, stacklevel=2)
@@ -98,16 +106,14 @@ def write_logs_report(
         velocity[:, j] = grid
         panels.append((f"joint {j + 1}", samples.qd[mine, j], samples.tau_friction[mine, j],
                        {"ours": (grid, friction.mean(velocity)[:, j])}))  # fmt: skip
+    out.mkdir(parents=True, exist_ok=True)
     _save_friction_figure(panels, f"{robot.name}: friction", out / "friction.png", raw=True)
     lines = [f"# Identification of {robot.name}", "", f"Fitted on: {', '.join(map(str, logs))}.",
              "", "Friction:", "", "```", str(friction_report), "```", "",
              *friction_values(friction, friction_report.joints), "",
              *([missing, ""] if missing else []), "Dynamics fit:", "",
              "```", str(report), "```", "", "![friction](friction.png)", ""]  # fmt: skip
-    for index, path in enumerate(held_out):
-        log = _users_log(path, robot)
-        errors = {"nominal": prediction_error(log, robot),
-                  "ours": prediction_error(log, identified, report.offset)}  # fmt: skip
+    for index, (path, log, errors) in enumerate(predictions):
         predicted = {name: log.tau - error for name, error in errors.items()}
         name = f"held_out_{index + 1}.png"
         _save_prediction_figure(log.t, log.tau, predicted, f"held-out {path.name}", out / name)

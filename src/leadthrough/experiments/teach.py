@@ -118,10 +118,12 @@ def teach_on_twin(
             recorder.event(recording.time, "interrupted", "Ctrl-C: the session was ended")
     if recording.interrupted:
         raise KeyboardInterrupt(_interrupted(out, recording.recorded, controller.dt))
-    if recording.recorded == 0:
+    if recording.recorded == 0:  # an empty file would only block the next --out
+        out.unlink(missing_ok=True)
         events = controller.supervisor.events
         why = events[-1].detail if events else "the session ended before the calibration did"
-        raise RecordingError(str(out), f"nothing was taught or recorded ({why})")
+        raise RecordingError(str(out), f"nothing was taught or recorded ({why}); no file "
+                             "written")  # fmt: skip
     force, supervisor = sim.operator_force, controller.supervisor
     if supervisor.fault_reason is not None:  # the arm was held from then on: say so
         faults = [event for event in supervisor.events if event.kind == "fault"]

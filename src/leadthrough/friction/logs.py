@@ -16,9 +16,21 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from leadthrough.errors import LeadthroughError
-from leadthrough.logs.rows import LogError, accept, as_table, common_width, numeric_rows
+from leadthrough.logs.log import FloatArray
+from leadthrough.logs.rows import (
+    LogError,
+    accept,
+    as_table,
+    common_width,
+    numeric_rows,
+    on_path,
+    plausible,
+)
+
+BoolArray = NDArray[np.bool_]
 
 
 class LogFileError(LeadthroughError, ValueError):
@@ -82,13 +94,13 @@ def _stack(logs: Sequence) -> dict[str, np.ndarray]:
 
 
 def _read_npz(path: Path) -> dict[str, np.ndarray]:
-    """The arrays of an excitation NPZ; a row with a value not finite dropped with a warning."""
+    """The arrays of an excitation NPZ; a corrupted row dropped with a warning (:func:`_sound`)."""
     with path.open("rb") as file, np.load(file) as data:  # closed when not a zip too
         arrays = {name: data[name] for name in ("t", "q", "qd", "tau")}
         arrays["run"] = data["run"] if "run" in data else np.zeros(len(arrays["t"]), dtype=int)
     table = np.column_stack([arrays[name] for name in ("run", "t", "q", "qd", "tau")])
     table = table.astype(float)  # text arrays: a ValueError, which names the file
-    keep = np.all(np.isfinite(table), axis=1)
+    keep = np.isfinite(table[:, 1]) & _sound(table[:, 0], *np.split(table[:, 2:], 3, axis=1))
     if not keep.all():
         accept(path, table, keep)  # the warning counting the dropped rows; mostly NaN: an error
     kept = {name: value[keep] for name, value in arrays.items()}
@@ -96,7 +108,7 @@ def _read_npz(path: Path) -> dict[str, np.ndarray]:
 
 
 def _read_csv(path: Path) -> dict[str, np.ndarray]:
-    """The columns of an excitation CSV; a truncated or non-finite row dropped with a warning."""
+    """The columns of an excitation CSV; a truncated or corrupted row dropped with a warning."""
     with path.open(encoding="utf-8") as file:
         header = file.readline().strip().split(",")
     if "t" not in header or "tau1" not in header:
@@ -109,12 +121,32 @@ def _read_csv(path: Path) -> dict[str, np.ndarray]:
     if width != len(header):
         raise ValueError(f"{width} columns but {len(header)} names in the header")
     table, whole = as_table(rows, width)
-    keep = whole & np.all(np.isfinite(table), axis=1)
-    table = accept(path, table, keep)
     column = {name: table[:, i] for i, name in enumerate(header)}
     n = sum(1 for name in header if name.startswith("tau"))
     joint_columns = {k: np.column_stack([column[f"{k}{i + 1}"] for i in range(n)])
                      for k in ("q", "qd", "tau")}  # fmt: skip
     run = column.get("run", np.zeros(len(table)))
+    keep = whole & np.isfinite(column["t"]) & _sound(run, *joint_columns.values())
+    accept(path, table, keep)
+    joint_columns = {name: value[keep] for name, value in joint_columns.items()}
+    column["t"], run = column["t"][keep], run[keep]
     dropped = np.array(len(keep) - keep.sum())
     return {"t": column["t"], "run": run.astype(int), "dropped_rows": dropped, **joint_columns}
+
+
+def _sound(run: FloatArray, q: FloatArray, qd: FloatArray, tau: FloatArray) -> BoolArray:
+    """Rows whose readings are finite, physically plausible and on their run's path.
+
+    Within the bounds of :data:`~leadthrough.logs.rows.PLAUSIBLE` (|q| ≤ 4π rad, |q̇| ≤ 20
+    rad/s, |τ| ≤ 5000 Nm) and each joint's angle within 0.2 rad of its run's running median
+    (:func:`~leadthrough.logs.rows.on_path`), as the robot logs' readers ask. Before, only
+    non-finite rows were dropped: one torque of 1e300 ended the fit in a traceback, and one
+    angle of 1000 rad was fitted (joint 1's level 1.50 → 7.77 Nm), silently.
+    """
+    n = q.shape[1]
+    kinds = ["q"] * n + ["qd"] * n + ["torque"] * n
+    keep = plausible(np.column_stack([q, qd, tau]), kinds) & np.isfinite(run)
+    for number in np.unique(run[np.isfinite(run)]):
+        rows = np.flatnonzero(run == number)
+        keep[rows] = on_path(q[rows], keep[rows])
+    return keep

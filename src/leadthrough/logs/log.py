@@ -40,8 +40,9 @@ def period_problem(period: float) -> str | None:
 def rate_ratio(t: FloatArray, q: FloatArray, qd: FloatArray) -> float | None:
     """The median of |q̇| / |dq/dt| where the joints move: 1 for a log timed in seconds.
 
-    A median: an angle that wraps or a driver that stalls (q̇ held, q still) moves it by
-    the few samples concerned only.
+    A median: an angle that wraps moves it by the few samples concerned only. Samples
+    whose angle did not change at all are left out: a driver that stalls (the whole
+    sample repeated, q̇ held while q stays) is the supervisor's to report, not a clock's.
 
     Args:
         t: Sample times [s], shape (N,), increasing.
@@ -55,26 +56,28 @@ def rate_ratio(t: FloatArray, q: FloatArray, qd: FloatArray) -> float | None:
         return None
     with np.errstate(divide="ignore", invalid="ignore"):
         rate = np.abs(np.gradient(q, t, axis=0))
-        moving = (np.abs(qd) > MOVING_SPEED) & np.isfinite(rate)
+        moving = (np.abs(qd) > MOVING_SPEED) & np.isfinite(rate) & (rate > 0.0)
         if np.count_nonzero(moving) < MIN_MOVING:
             return None
         return float(np.median(np.abs(qd[moving]) / rate[moving]))
 
 
 def rate_problem(t: FloatArray, q: FloatArray, qd: FloatArray) -> str | None:
-    """Why the time column ``t`` runs too fast to be in seconds by the log's q̇, else None.
+    """Why the time column ``t`` does not run in seconds by the log's q̇, else None.
 
     A time column divided by 60 or 1000 has a plausible sample period (a fast clock
-    passes :func:`period_problem`), but its dq/dt is 60 or 1000 times the logged q̇. A
-    clock too slow is :func:`period_problem`'s; a q̇ above dq/dt is also a stalled
-    driver's, which ``inspect`` reports. Arguments as :func:`rate_ratio`'s.
+    passes :func:`period_problem`), but its dq/dt is 60 or 1000 times the logged q̇; one
+    stretched (a clock too slow, or the q̇ columns another quantity's) has a dq/dt below
+    it: a free-motion log stretched 5× read two contacts, and one whose q̇ column held
+    torques identified a joint without friction. Arguments as :func:`rate_ratio`'s.
     """
     ratio = rate_ratio(t, q, qd)
-    if ratio is None or ratio >= 1.0 / RATE_TOLERANCE:
+    if ratio is None or 1.0 / RATE_TOLERANCE <= ratio <= RATE_TOLERANCE:
         return None
-    return (f"its time column runs {1.0 / ratio:.0f}× too fast for its q̇ (dq/dt against the "
-            f"logged q̇ where the joints move): is it in seconds? A robot's agree within "
-            f"{RATE_TOLERANCE:g}×")  # fmt: skip
+    fast, factor = ratio < 1.0, max(ratio, 1.0 / ratio)
+    return (f"its time column runs {factor:.0f}× too {'fast' if fast else 'slow'} for its q̇ "
+            f"(dq/dt against the logged q̇ where the joints move): is it in seconds, and is "
+            f"q̇ the joint velocity? A robot's agree within {RATE_TOLERANCE:g}×")  # fmt: skip
 
 
 @dataclass(frozen=True, eq=False)

@@ -17,6 +17,11 @@ from leadthrough.logs.log import FloatArray
 
 #: More than this fraction of rows dropped: the file is not a log.
 MOSTLY_GARBAGE = 0.5
+#: Largest plausible |value| of a column kind: joint angle [rad], velocity [rad/s], motor
+#: current [A], torque [Nm].
+PLAUSIBLE = {"q": 4.0 * np.pi, "qd": 20.0, "current": 100.0, "torque": 5000.0}
+#: A joint reading farther than this from the run's running median is corrupted [rad].
+OFF_PATH = 0.2
 
 
 class LogError(LeadthroughError, ValueError):
@@ -78,3 +83,25 @@ def accept(path: Path, table: FloatArray, keep: np.ndarray) -> FloatArray:
         warnings.warn(f"{path}: dropped {dropped.size} of {total} rows as corrupted "
                       f"(rows {first}{more})", LogWarning, stacklevel=4)  # fmt: skip
     return table[keep]
+
+
+def plausible(table: FloatArray, kinds: list[str]) -> np.ndarray:
+    """Rows whose every value is finite and within its kind's physical bound."""
+    bounds = np.array([PLAUSIBLE.get(kind, np.inf) for kind in kinds])
+    with np.errstate(invalid="ignore"):
+        return np.all(np.isfinite(table) & (np.abs(table) <= bounds), axis=1)
+
+
+def on_path(q: FloatArray, candidates: np.ndarray, window: int = 9) -> np.ndarray:
+    """Rows whose joint readings lie within :data:`OFF_PATH` of the running median."""
+    from scipy.ndimage import median_filter  # at call time: keeps `import leadthrough` fast
+
+    ok = candidates & np.all(np.isfinite(q), axis=1) & np.all(np.abs(q) <= PLAUSIBLE["q"], axis=1)
+    result = np.zeros(len(q), dtype=bool)
+    index = np.flatnonzero(ok)
+    if index.size == 0:
+        return result
+    values = q[index]
+    median = median_filter(values, size=(min(window, len(values)), 1), mode="nearest")
+    result[index] = np.all(np.abs(values - median) <= OFF_PATH, axis=1)
+    return result

@@ -42,6 +42,8 @@ from leadthrough.logs.rows import (
     as_table,
     common_width,
     numeric_rows,
+    on_path,
+    plausible,
 )
 from leadthrough.model.description import RobotDescription
 
@@ -49,10 +51,6 @@ Format = Literal["ur_csv", "panda_txt", "recording", "excitation"]
 
 #: UR CSV column counts that the format allows.
 _UR_WIDTHS = (19, 25, 31)
-#: Largest plausible |value| of a column kind.
-_BOUNDS = {"q": 4.0 * np.pi, "qd": 20.0, "current": 100.0, "torque": 5000.0}
-#: A joint reading farther than this from the run's running median is corrupted [rad].
-_OFF_PATH = 0.2
 
 
 def read_log(
@@ -175,7 +173,7 @@ def _read_ur_csv(path: Path) -> JointLog:
     table, complete = as_table(rows, width)
     targets = ["current"] * 6 + ["torque"] * 6 if width == 31 else ["other"] * 6  # 25: unnamed
     kinds = ["time"] + ["q"] * 6 + ["qd"] * 6 + ["current"] * 6 + targets
-    keep = complete & _plausible(table, kinds[:width]) & _on_path(table[:, 1:7], complete)
+    keep = complete & plausible(table, kinds[:width]) & on_path(table[:, 1:7], complete)
     keep &= _time_increases(table[:, 0], keep)
     table = accept(path, table, keep)
     extra = {}
@@ -185,28 +183,6 @@ def _read_ur_csv(path: Path) -> JointLog:
         extra["target_current"], extra["target_torque"] = table[:, 19:25], table[:, 25:31]
     return JointLog(table[:, 0], table[:, 1:7], table[:, 7:13], None, table[:, 13:19], extra,
                     str(path), int(len(rows) - keep.sum()))  # fmt: skip
-
-
-def _plausible(table: FloatArray, kinds: list[str]) -> np.ndarray:
-    """Rows whose every value is finite and within its kind's physical bound."""
-    bounds = np.array([_BOUNDS.get(kind, np.inf) for kind in kinds])
-    with np.errstate(invalid="ignore"):
-        return np.all(np.isfinite(table) & (np.abs(table) <= bounds), axis=1)
-
-
-def _on_path(q: FloatArray, candidates: np.ndarray, window: int = 9) -> np.ndarray:
-    """Rows whose joint readings lie within :data:`_OFF_PATH` of the running median."""
-    from scipy.ndimage import median_filter  # at call time: keeps `import leadthrough` fast
-
-    ok = candidates & np.all(np.isfinite(q), axis=1) & np.all(np.abs(q) <= _BOUNDS["q"], axis=1)
-    result = np.zeros(len(q), dtype=bool)
-    index = np.flatnonzero(ok)
-    if index.size == 0:
-        return result
-    values = q[index]
-    median = median_filter(values, size=(min(window, len(values)), 1), mode="nearest")
-    result[index] = np.all(np.abs(values - median) <= _OFF_PATH, axis=1)
-    return result
 
 
 def _time_increases(t: FloatArray, keep: np.ndarray) -> np.ndarray:
@@ -258,8 +234,8 @@ def _read_panda_txt(path: Path) -> JointLog:
     q, qd, tau = (columns[kind].reshape(t.size, n) for kind in ("positions", "velocity", "torques"))
     table = np.column_stack([t, q, qd, tau])
     kinds = ["time"] + ["q"] * n + ["qd"] * n + ["torque"] * n
-    keep = _plausible(table, kinds)
-    keep = _time_increases(t, keep & _on_path(q, keep))
+    keep = plausible(table, kinds)
+    keep = _time_increases(t, keep & on_path(q, keep))
     table = accept(folder, table, keep)
     return JointLog(table[:, 0], table[:, 1:1 + n], table[:, 1 + n:1 + 2 * n],
                     table[:, 1 + 2 * n:], source=str(folder),

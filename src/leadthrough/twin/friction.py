@@ -57,10 +57,10 @@ from collections.abc import Callable
 from dataclasses import dataclass, fields, replace
 from functools import partial
 
-import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from leadthrough.compiled import kernel
 from leadthrough.errors import InputShapeError
 from leadthrough.model.description import RobotDescription
 from leadthrough.model.dynamics import Dynamics
@@ -307,7 +307,7 @@ class TwinFrictionParameters:
         )
 
 
-@numba.njit(cache=True)
+@kernel
 def _lugre_step(q, v, constants, bristle_torque, base, out):
     """One exact bristle step per joint (see the module docstring), compiled: ~1 µs for 7 joints.
 

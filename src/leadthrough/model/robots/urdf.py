@@ -120,6 +120,7 @@ def from_urdf(
         raise RobotDescriptionError(source, "", f"not a valid URDF ({error})") from None
     with within("", source=source):
         chain_ids, tip_frame = _chain(full, tip)
+        _no_mimic_on_chain(root, [str(full.names[i]) for i in chain_ids])
         if tip is None:
             _warn_gripper_joint(text, str(full.names[chain_ids[-1]]), source)
         model = _lock_off_chain(full, chain_ids)
@@ -219,6 +220,20 @@ def _chain(model: pin.Model, tip: str | None) -> tuple[list[int], str | None]:
     if not chain:
         raise RobotDescriptionError("", "tip", "no moving joint between the root and the tip")
     return chain[::-1], tip
+
+
+def _no_mimic_on_chain(root: ElementTree.Element, chain: list[str]) -> None:
+    """Raise if a joint of the arm's chain mimics another (a finger's off the chain may).
+
+    Each arm joint is driven and guided on its own; a ``<mimic>`` joint on the chain was
+    loaded as an independent joint, silently.
+    """
+    for joint in root.findall("joint"):
+        mimic = joint.find("mimic")
+        if mimic is not None and joint.get("name") in chain:
+            raise RobotDescriptionError("", f"joint {joint.get('name')!r}", f"mimics "
+                                        f"{mimic.get('joint')!r}: a joint of the arm between "
+                                        "its root and tip must move on its own")  # fmt: skip
 
 
 def _frame_id(model: pin.Model, name: str) -> int:

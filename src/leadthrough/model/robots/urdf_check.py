@@ -61,6 +61,7 @@ def check_urdf(root: ElementTree.Element, source: str) -> None:
     for joint, name in zip(elements["joint"], names["joint"], strict=True):
         with within(f"joint {name!r}", source=source):
             _check_joint(joint, set(names["link"]))
+    _check_tree(elements["joint"], names["link"], source)
     for link, name in zip(elements["link"], names["link"], strict=True):
         with within(f"link {name!r}", source=source):
             _check_inertial(link.find("inertial"))
@@ -93,6 +94,44 @@ def _check_joint(joint: ElementTree.Element, links: set[str]) -> None:
         raise fail("", "<dynamics> has neither damping nor friction")
     for attribute in ("damping", "friction"):
         _numbers(dynamics, attribute, minimum=0.0)
+
+
+def _check_tree(joints: list[ElementTree.Element], links: list[str], source: str) -> None:
+    """Raise unless the joints join the links into one tree: one root, one parent each.
+
+    A link that is the child of two joints, or a loop of joints, made Pinocchio's parser
+    crash the process (a segmentation fault, nothing printed) or urdfdom print on stderr
+    and say only "not a valid URDF".
+    """
+    parent_joint: dict[str, str] = {}
+    children: dict[str, list[str]] = {link: [] for link in links}
+    for joint in joints:
+        name = str(joint.get("name"))
+        parent, child = (str(joint.find(side).get("link")) for side in ("parent", "child"))  # type: ignore[union-attr]
+        if child in parent_joint:
+            raise RobotDescriptionError(source, f"link {child!r}", f"is the child of joints "
+                                        f"{parent_joint[child]!r} and {name!r}: a URDF is a "
+                                        "tree, each link has one parent")  # fmt: skip
+        parent_joint[child] = name
+        children[parent].append(child)
+    roots = [link for link in links if link not in parent_joint]
+    if not roots:
+        raise RobotDescriptionError(source, "", "every link is some joint's child: the joints "
+                                    "form a loop (a URDF is a tree)")  # fmt: skip
+    if len(roots) != 1:
+        found = ", ".join(repr(root) for root in roots) or "none"
+        raise RobotDescriptionError(source, "", f"the joints join the links into {len(roots)} "
+                                    f"trees, not one (root links: {found})")  # fmt: skip
+    reached, stack = {roots[0]}, [roots[0]]
+    while stack:
+        for child in children[stack.pop()]:
+            if child not in reached:
+                reached.add(child)
+                stack.append(child)
+    loop = [link for link in links if link not in reached]
+    if loop:
+        raise RobotDescriptionError(source, f"link {loop[0]!r}", f"is on a loop of joints, "
+                                    f"not below the root link {roots[0]!r}")  # fmt: skip
 
 
 def _check_inertial(inertial: ElementTree.Element | None) -> None:
