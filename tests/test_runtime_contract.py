@@ -535,3 +535,31 @@ def test_teaching_records_after_the_command_is_sent_and_warms_up_first(tmp_path,
     hold = round(0.5 / 0.004)  # then the hold at the end (stop_time), nothing recorded
     assert journal == ["send", "record"] * 10 + ["send"] * hold
     assert report.loop.warm_up > 0.0
+
+
+def test_the_estimate_a_user_reads_is_a_value_not_the_controllers_buffer():
+    """ctl.tau_ext_hat and ctl.std kept over a run hold each period's values.
+
+    Before, both returned the fusion's arrays, written in place every period: a user who
+    appended them after each step got the last period's value in every row.
+    """
+    twin = DigitalTwin(ROBOT, operator=pulling_hand_for_a_test())
+    controller = lt.LeadThrough(ROBOT, "active")
+    kept, copied = [], []
+
+    def keep(state, command) -> None:
+        kept.append((controller.tau_ext_hat, controller.std))
+        copied.append((controller.tau_ext_hat.copy(), controller.std.copy()))
+
+    lt.control_loop(twin, controller, duration=1.0, after_period=keep, wall_clock=False,
+                    hold_at_end=False)  # fmt: skip
+    for (estimate, std), (estimate_then, std_then) in zip(kept, copied, strict=True):
+        np.testing.assert_array_equal(estimate, estimate_then)
+        np.testing.assert_array_equal(std, std_then)
+    assert np.ptp(np.array([estimate for estimate, _ in kept]), axis=0).max() > 0.1  # [Nm]
+
+
+def pulling_hand_for_a_test() -> During:
+    """A hand pulling the tool 10 cm sideways in 1 s."""
+    start = lt.Dynamics(ROBOT).pose(ROBOT.home())[:3, 3]
+    return During(Hand(Line(start, start + np.array([0.0, 0.1, 0.0]), duration=1.0)), 0.0, 1.0)

@@ -207,7 +207,7 @@ class LeadThrough:
         fusion = self.fusion
         if fusion is None or not fusion.updated:
             return self.observer.tau_ext_hat
-        return fusion.mean
+        return fusion.mean.copy()  # a value: the fusion writes its arrays in place
 
     @property
     def std(self) -> FloatArray:
@@ -215,7 +215,7 @@ class LeadThrough:
         fusion = self.fusion
         if fusion is None or not fusion.updated:
             return self.joint_std
-        return fusion.std
+        return fusion.std.copy()
 
     @property
     def joint_std(self) -> FloatArray:

@@ -35,7 +35,7 @@ from leadthrough.errors import LeadthroughError, ParameterError
 from leadthrough.estimation.contacts import ContactDetector, ContactEvent, ContactParameters
 from leadthrough.estimation.observer import MomentumObserver, ObserverParameters
 from leadthrough.friction.model import FrictionModel
-from leadthrough.logs.log import MAX_GAP, JointLog
+from leadthrough.logs.log import MAX_GAP, JointLog, as_joint_log
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.validation import real
@@ -285,7 +285,7 @@ def run_detector(
 
 
 def detect_contacts(
-    log: JointLog,
+    log: object,
     robot: RobotDescription,
     friction: FrictionModel | None = None,
     parameters: ContactParameters | None = None,
@@ -294,7 +294,8 @@ def detect_contacts(
     """Contacts in a log: the momentum observer at the log's rate, then the detector.
 
     Args:
-        log: The run (``tau``, or ``current`` and the robot's torque constants).
+        log: The run (``tau``, or ``current`` and the robot's torque constants): a
+            JointLog, or a mapping or object with its arrays (:func:`~.logs.log.as_joint_log`).
         robot: The arm's model: nominal (``lt.robots.ur10e()``) or identified.
         friction: Its friction model; None takes the robot's.
         parameters: Detector thresholds (see :class:`ContactParameters`).
@@ -308,7 +309,7 @@ def detect_contacts(
     Raises:
         LogInputError: No torque in the log, a joint count that does not match, too short.
     """
-    return events_of(observe_runs(log, robot, friction, uncertainty), parameters)
+    return events_of(observe_runs(as_joint_log(log), robot, friction, uncertainty), parameters)
 
 
 def events_of(

@@ -56,7 +56,7 @@ import pinocchio as pin
 from leadthrough.errors import LeadthroughError, ParameterError
 from leadthrough.estimation.log_observer import measured_torque, resample
 from leadthrough.friction.model import FrictionModel
-from leadthrough.logs.log import JointLog
+from leadthrough.logs.log import JointLog, as_joint_log, one_or_many
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.model.pinocchio_model import FLANGE_FRAME
@@ -183,7 +183,7 @@ def estimate_payload(
             separate mass and centre of mass.
         LogInputError: A log without torque or current, or with another joint count.
     """
-    logs = [logs] if isinstance(logs, JointLog) else list(logs)
+    logs = [as_joint_log(log, index) for index, log in enumerate(one_or_many(logs))]
     if not logs:
         raise PayloadError("estimate_payload: no logs given")
     parameters = parameters or PayloadParameters()
@@ -199,8 +199,8 @@ def estimate_payload(
     loaded = fit(logs)
     theta, covariance = loaded.theta, loaded.covariance
     bias, gain = loaded.bias, loaded.gain_bias
-    if unloaded:
-        empty = fit([unloaded] if isinstance(unloaded, JointLog) else list(unloaded))
+    if unloaded is not None:
+        empty = fit([as_joint_log(log, index) for index, log in enumerate(one_or_many(unloaded))])
         theta, covariance = theta - empty.theta, covariance + empty.covariance
         bias, gain = bias - empty.bias, gain - empty.gain_bias  # shifted alike in both fits
     systematic = (parameters.model_error**2 * (bias @ bias.T)

@@ -40,6 +40,7 @@ Parameter standard deviations come from the least-squares covariance.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -47,11 +48,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from leadthrough.errors import LeadthroughError
+from leadthrough.errors import LeadthroughError, ParameterError
 from leadthrough.filters import low_pass_signal, pole
 from leadthrough.friction.along_travel import level_along_travel, level_error
 from leadthrough.friction.model import FrictionModel, level_stays_positive, sigmoid
-from leadthrough.logs.log import period_problem, rate_problem
+from leadthrough.logs.log import JointLog, period_problem, rate_problem
 from leadthrough.logs.runs import log_name, refuse_repeated_logs
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
@@ -159,18 +160,24 @@ class FrictionSamples:
 
 def identify_friction(
     logs: Any,
-    dynamics: Dynamics | RobotDescription,
+    robot: Dynamics | RobotDescription | None = None,
     joints: Sequence[int] | None = None,
     settings: IdentificationSettings | None = None,
     prior: FrictionModel | None = None,
+    *,
+    dynamics: Dynamics | RobotDescription | None = None,
 ) -> tuple[FrictionModel, FitReport]:
     """Fit the Gaussian friction model to excitation logs.
 
     Args:
         logs: One log or a list of logs (mappings or objects with arrays ``t`` (N,),
             ``q``, ``qd``, ``tau`` (N, n)); ``tau`` is the measured motor torque, arm side.
-        dynamics: Model used to remove gravity and inertia torques (or the robot
-            description, whose model is then built here).
+            A :class:`~leadthrough.logs.log.JointLog` of motor currents (``lt.read_log``
+            of a UR CSV without the robot) takes ``K · i`` with the robot's torque
+            constants, as ``identify_dynamics`` does.
+        robot: The robot description (its model is built here), or its model
+            (:class:`Dynamics`), used to remove gravity and inertia torques.
+        dynamics: The same, by its former name (``dynamics=`` still works).
         joints: Joints to identify (default: every joint that moved in some log and
             slid for at least ``settings.minimum_samples`` samples; a joint that only
             twitched is left at the prior rather than failing the whole fit).
@@ -189,10 +196,14 @@ def identify_friction(
             (:func:`~leadthrough.logs.runs.refuse_repeated_logs`).
     """
     settings = settings or IdentificationSettings()
-    if isinstance(dynamics, RobotDescription):
-        dynamics = Dynamics(dynamics)
-    samples = friction_samples(logs, dynamics, settings)
-    return fit_friction(samples, dynamics, joints, settings, prior)
+    model = robot if robot is not None else dynamics
+    if model is None:
+        raise ParameterError("robot", "the robot (or its Dynamics) is needed to remove gravity "
+                             "and inertia")  # fmt: skip
+    if isinstance(model, RobotDescription):
+        model = Dynamics(model)
+    samples = friction_samples(logs, model, settings)
+    return fit_friction(samples, model, joints, settings, prior)
 
 
 def fit_friction(
@@ -251,9 +262,13 @@ def friction_samples(
         ParameterError: A log is given twice (:func:`~leadthrough.logs.runs.refuse_repeated_logs`).
     """
     settings = settings or IdentificationSettings()
-    logs = [logs] if _is_log(logs) else list(logs)
+    logs = [logs] if _is_log(logs) or isinstance(logs, str | os.PathLike) else list(logs)
     if not logs:
         raise IdentificationError("no logs given")
+    paths = [log for log in logs if isinstance(log, str | os.PathLike)]
+    if paths:  # a path given as a log (its characters were taken for logs)
+        raise IdentificationError(f"logs: {paths[0]} is a path: read it first, "
+                                  "lt.read_log(path)")  # fmt: skip
     refuse_repeated_logs(logs)
     parts = [_log_samples(i, log, dynamics, settings) for i, log in enumerate(logs)]
     return FrictionSamples(*(np.concatenate(arrays) for arrays in zip(*parts, strict=True)))
@@ -272,11 +287,24 @@ def log_field(log: Any, name: str, index: int = 0) -> FloatArray:
     return np.asarray(value, dtype=float)
 
 
+def _measured_torque(log: Any, index: int, robot: RobotDescription) -> FloatArray:
+    """The log's arm-side torque [Nm]: ``tau``, or ``K · i`` of a JointLog of currents."""
+    if isinstance(log, JointLog):
+        torque = log.joint_torque(robot.torque_constants)
+        if torque is None:
+            has = "no motor currents" if log.current is None else "currents"
+            raise IdentificationError(f"{log_name(log, index)}: no measured torque, and {has} "
+                                      f"without {robot.name}'s torque constants")  # fmt: skip
+        return torque
+    return log_field(log, "tau", index)
+
+
 def _log_samples(
     index: int, log: Any, dynamics: Dynamics, settings: IdentificationSettings
 ) -> tuple[FloatArray, ...]:
     """(q, q̇, τ_f, moved) of one validated log."""
-    t, q, qd, tau = (log_field(log, name, index) for name in ("t", "q", "qd", "tau"))
+    t, q, qd = (log_field(log, name, index) for name in ("t", "q", "qd"))
+    tau = _measured_torque(log, index, dynamics.robot)
     n, label = dynamics.n, log_name(log, index)
     if t.ndim != 1 or len(t) < 50:
         raise IdentificationError(f"{label}: too short ({len(t)} samples, need ≥ 50)")

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from leadthrough.errors import InputShapeError
+from leadthrough.errors import InputShapeError, ParameterError
 
 FloatArray = NDArray[np.float64]
 
@@ -186,3 +187,37 @@ class JointLog:
         extra = {name: np.asarray(value)[rows] for name, value in self.extra.items()}
         return JointLog(self.t[rows], self.q[rows], self.qd[rows], cut(self.tau),
                         cut(self.current), extra, self.source)  # fmt: skip
+
+
+def as_joint_log(log: Any, index: int = 0) -> JointLog:
+    """``log`` as a :class:`JointLog`: one already, a mapping or an object with its arrays.
+
+    The forms ``lt.identify_friction`` takes (``t``, ``q``, ``qd`` and ``tau`` or
+    ``current``, as keys or attributes; ``source`` if given), for every function of the
+    API that reads logs: ``identify_dynamics``, ``estimate_payload`` and
+    ``detect_contacts`` took a JointLog only, and a dict failed with an AttributeError.
+
+    Raises:
+        ParameterError: ``log`` has no ``t``, ``q`` or ``qd`` (one line naming it).
+        InputShapeError: Its arrays do not agree in shape.
+    """
+    if isinstance(log, JointLog):
+        return log
+
+    def get(name: str) -> Any:
+        return log.get(name) if isinstance(log, Mapping) else getattr(log, name, None)
+
+    missing = [name for name in ("t", "q", "qd") if get(name) is None]
+    if missing:
+        raise ParameterError("logs", f"log {index} ({type(log).__name__}) has no "
+                             f"'{missing[0]}': give a JointLog (lt.read_log), or a mapping or "
+                             "object with t, q, qd and tau")  # fmt: skip
+    return JointLog(get("t"), get("q"), get("qd"), get("tau"), get("current"),
+                    source=str(get("source") or ""))  # fmt: skip
+
+
+def one_or_many(logs: Any) -> list[Any]:
+    """``[logs]`` when ``logs`` is one log (a JointLog, a mapping, an object with ``t``)."""
+    if isinstance(logs, JointLog | Mapping) or hasattr(logs, "t"):
+        return [logs]
+    return list(logs)

@@ -310,6 +310,11 @@ class RobotDescription:
             return None
         return self._stack(lambda joint: float(joint.torque_constant))  # type: ignore[arg-type]
 
+    @property
+    def torque_constant(self) -> FloatArray | None:
+        """:attr:`torque_constants` by the name SPEC §10 gives it (``ur10e.torque_constant``)."""
+        return self.torque_constants
+
     @cached_property
     def masses(self) -> FloatArray:
         """Link masses [kg], shape (n,)."""

@@ -49,6 +49,8 @@ from leadthrough.model.description import RobotDescription
 
 Format = Literal["ur_csv", "panda_txt", "recording", "excitation"]
 
+#: Time between two runs of an excitation log read as one JointLog [s] (> MAX_GAP).
+RUN_GAP = 1.0
 #: UR CSV column counts that the format allows.
 _UR_WIDTHS = (19, 25, 31)
 
@@ -271,14 +273,26 @@ def _read_recording(path: Path) -> JointLog:
 
 
 def _read_excitation(path: Path) -> JointLog:
+    """An excitation log; one of several runs (``identify --save-log``) as one JointLog.
+
+    The runs are put one after the other with :data:`RUN_GAP` between them, a gap longer
+    than :data:`~leadthrough.logs.log.MAX_GAP`: ``log.runs()`` gives them back, and the
+    observer and the contact detector start afresh after it. Before, a log of several runs
+    was an error pointing to a function outside the API.
+    """
     from leadthrough.friction.logs import LogFileError, load_logs
 
     try:
         runs = load_logs(path)
     except LogFileError as error:
         raise LogError(str(error)) from None
-    if len(runs) != 1:
-        raise LogError(f"{path}: holds {len(runs)} runs; read them with friction.logs.load_logs")
-    run = runs[0]
-    return JointLog(run["t"], run["q"], run["qd"], run["tau"], source=str(path),
-                    dropped_rows=run["dropped_rows"])  # fmt: skip
+    times, start = [], 0.0
+    for run in runs:
+        t = np.asarray(run["t"], dtype=float)
+        shift = start - (t[0] if t.size else 0.0)
+        times.append(t + shift)
+        start = (times[-1][-1] if t.size else start) + RUN_GAP
+    joined = {name: np.concatenate([run[name] for run in runs]) for name in ("q", "qd", "tau")}
+    return JointLog(np.concatenate(times), joined["q"], joined["qd"], joined["tau"],
+                    source=str(path),
+                    dropped_rows=sum(int(run["dropped_rows"]) for run in runs))  # fmt: skip
