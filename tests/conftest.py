@@ -32,3 +32,15 @@ def realistic_friction(identified_friction):
     from leadthrough.experiments.observer import identified_without_position
 
     return identified_without_position(identified_friction)
+
+
+@pytest.fixture(scope="session")
+def ur10e():
+    """The nominal UR10e (its assumed-drive-data warning silenced)."""
+    import warnings
+
+    import leadthrough as lt
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return lt.robots.ur10e()

@@ -6,8 +6,6 @@ function but one, ``robot.torque_constant`` missing, an excitation log of severa
 ``read_log`` could not read, a path taken character by character.
 """
 
-import warnings
-
 import numpy as np
 import pytest
 
@@ -15,14 +13,6 @@ import leadthrough as lt
 from leadthrough.friction.identification import IdentificationError
 from leadthrough.friction.logs import save_logs
 from test_contacts import synthetic_log
-
-
-@pytest.fixture(scope="module")
-def ur10e():
-    """The nominal UR10e (its assumed-drive-data warning silenced)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return lt.robots.ur10e()
 
 
 def _as_dict(log: lt.JointLog, torque_constants) -> dict:

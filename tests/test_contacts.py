@@ -17,14 +17,6 @@ from leadthrough.estimation.log_observer import (
 from realdata import REALDATA, needs_realdata
 
 
-@pytest.fixture(scope="module")
-def ur10e():
-    """The nominal UR10e (its assumed-drive-data warning silenced)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return lt.robots.ur10e()
-
-
 def synthetic_log(robot, push=None, duration=6.0, seed=0, current=False):
     """A log whose torque is what the model needs, minus a known external torque.
 

@@ -12,14 +12,6 @@ from realdata import REALDATA, needs_realdata
 from test_contacts import synthetic_log
 
 
-@pytest.fixture(scope="module")
-def ur10e():
-    """The nominal UR10e (its assumed-drive-data warning silenced)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return lt.robots.ur10e()
-
-
 def write_ur_csv(log: lt.JointLog, path) -> None:
     """A log in the UR layout of 19 columns: time, q, q̇, motor current."""
     np.savetxt(path, np.column_stack([log.t + 1000.0, log.q, log.qd, log.current]),

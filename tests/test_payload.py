@@ -24,14 +24,6 @@ PAYLOADS = [Payload(0.5, (0.03, -0.02, 0.04)), Payload(1.2, (0.0, 0.0, 0.1)),
 
 
 @pytest.fixture(scope="module")
-def ur10e():
-    """The nominal UR10e (its assumed-drive-data warning silenced)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return lt.robots.ur10e()
-
-
-@pytest.fixture(scope="module")
 def empty(ur10e):
     """The twin's run of the excitation without payload."""
     return record(ur10e, None, MODEL_ERROR, seed=1, amplitude=AMPLITUDE)
