@@ -6,6 +6,8 @@ function but one, ``robot.torque_constant`` missing, an excitation log of severa
 ``read_log`` could not read, a path taken character by character.
 """
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
@@ -29,13 +31,23 @@ def test_identify_friction_takes_a_log_of_currents_and_the_robot_by_name(ur10e):
     for call in ({"robot": ur10e}, {"dynamics": lt.Dynamics(ur10e)}):
         model, _ = lt.identify_friction([currents], **call)
         np.testing.assert_allclose(model.coulomb, expected.coulomb)
+    arrays = {"t": currents.t, "q": currents.q, "qd": currents.qd, "current": currents.current}
+    for form in (arrays, [arrays], SimpleNamespace(**arrays), [SimpleNamespace(**arrays)]):
+        model, _ = lt.identify_friction(form, ur10e)  # currents as a mapping or an object
+        np.testing.assert_allclose(model.coulomb, expected.coulomb)
 
 
 @pytest.mark.parametrize("logs", ["run.csv", ["run.csv"]])
-def test_a_path_given_as_a_log_is_named(logs):
+def test_a_path_given_as_a_log_is_named(logs, ur10e):
     """A path is not a log: one line saying to read it (before, "log 4 is given twice")."""
     with pytest.raises(IdentificationError, match=r"run\.csv is a path: read it first"):
-        lt.identify_friction(logs, lt.robots.yumi())
+        lt.identify_friction(logs, ur10e)
+    calls = (lambda: lt.identify_dynamics(logs, ur10e),
+             lambda: lt.estimate_payload(logs, ur10e, None),
+             lambda: lt.detect_contacts("run.csv", ur10e))  # fmt: skip
+    for call in calls:
+        with pytest.raises(lt.ParameterError, match=r"run\.csv is a path: read it first"):
+            call()
 
 
 def test_every_function_that_reads_logs_takes_a_mapping_as_identify_friction_does(ur10e):

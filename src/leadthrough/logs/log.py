@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -203,6 +204,8 @@ def as_joint_log(log: Any, index: int = 0) -> JointLog:
     """
     if isinstance(log, JointLog):
         return log
+    if isinstance(log, str | os.PathLike):
+        raise ParameterError("logs", f"{log} is a path: read it first, lt.read_log(path)")
 
     def get(name: str) -> Any:
         return log.get(name) if isinstance(log, Mapping) else getattr(log, name, None)
@@ -217,7 +220,14 @@ def as_joint_log(log: Any, index: int = 0) -> JointLog:
 
 
 def one_or_many(logs: Any) -> list[Any]:
-    """``[logs]`` when ``logs`` is one log (a JointLog, a mapping, an object with ``t``)."""
-    if isinstance(logs, JointLog | Mapping) or hasattr(logs, "t"):
+    """``[logs]`` when ``logs`` is one log, else the list of them.
+
+    One log: a JointLog, a mapping, an object with ``t``, or a path (which
+    :func:`as_joint_log` names as one).
+    """
+    if isinstance(logs, JointLog | Mapping | str | os.PathLike) or hasattr(logs, "t"):
         return [logs]
-    return list(logs)
+    try:
+        return list(logs)
+    except TypeError:  # one log of another kind: as_joint_log says what it lacks
+        return [logs]
