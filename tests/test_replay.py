@@ -117,7 +117,7 @@ def refusals() -> dict[str, tuple]:
     nan = q.copy()
     nan[40, 3] = np.nan
     backwards = t.copy()
-    backwards[9] = backwards[8]
+    backwards[9] = backwards[8] - DT  # a stamp back (a repeated one is taken: below)
     shake = np.arange(751) * DT
     fast = np.tile(HOME, (len(shake), 1))
     fast[:, 0] += 0.03 * np.sin(2 * np.pi * 4.0 * shake)  # 4 Hz, 30 mrad on joint 1
@@ -159,6 +159,19 @@ def test_the_suggested_time_scale_passes_and_is_close_to_the_least(dyn, case):
     plan_replay(t, q, dyn, parameters=ReplayParameters(**base, time_scale=scale))
     with pytest.raises(ReplayError):
         plan_replay(t, q, dyn, parameters=ReplayParameters(**base, time_scale=scale / 1.1))
+
+
+def test_a_repeated_stamp_keeps_its_first_sample(dyn):
+    """A coarse clock repeats stamps (the supervisor takes them while teaching): planned.
+
+    Before, one repeated stamp refused the whole recording ("time not increasing").
+    """
+    t, q = taught_path()
+    repeated = t.copy()
+    repeated[9] = repeated[8]
+    plan = plan_replay(repeated, q, dyn)
+    reference = plan_replay(np.delete(t, 9), np.delete(q, 9, axis=0), dyn)
+    np.testing.assert_allclose(plan.q, reference.q)
 
 
 def test_parameters_are_validated():
@@ -290,6 +303,49 @@ def test_replay_from_elsewhere_slower_on_a_perturbed_arm(dyn):
           f"tool RMS {errors['tool_rms'] * 1e3:.3f} mm")  # fmt: skip
     assert errors["joint_rms"] <= 2e-3 and errors["tool_rms"] <= 2e-3
     assert replayer.supervisor.state is SupervisorState.HOLDING
+
+
+def test_an_approach_from_far_away_is_slowed_to_a_share_of_the_speed_limits(dyn):
+    """2.5 rad from the path start on joint 1: the approach takes as long as its speed needs.
+
+    Before, it always took 2 s: 2.3 rad/s on joint 1 (4.4 rad/s from 5.2 rad away, against
+    its 3.14 rad/s limit, which the supervisor only braked).
+    """
+    q0 = taught_path()[1][0]
+    start = q0.copy()
+    start[0] = q0[0] - 2.5 if q0[0] - 2.5 > ROBOT.q_min[0] + 0.2 else q0[0] + 2.5
+    plan = plan_replay(*taught_path(), dyn)
+    twin = DigitalTwin(ROBOT, TwinConfig(seed=3), q0=start)
+    replayer = Replayer(plan, dyn, dt=twin.dt)
+    approach = 1.875 * 2.5 / (0.2 * ROBOT.velocity_limits[0])
+    run = simulate(twin, replayer, approach + plan.duration + 0.6)
+    assert replayer.approach_time == pytest.approx(approach, rel=1e-4)  # the encoder's start
+    during = run.t <= approach
+    assert np.max(np.abs(run.qd_true[during, 0])) <= 0.2 * 1.1 * ROBOT.velocity_limits[0]
+    assert replayer.done and replayer.supervisor.state is SupervisorState.HOLDING
+    errors = replay_errors(plan, run.q_true, run.t, dyn, approach_time=replayer.approach_time)
+    assert errors["joint_rms"] <= 2e-3
+
+
+def test_an_arm_held_back_is_a_fault_not_a_full_torque_push(dyn):
+    """The arm does not follow (held, blocked): a fault once 0.1 rad off, the safe stop.
+
+    Before, nothing bounded the tracking error: held back by 29 Nm, joint 1 fell 0.58 rad
+    behind under the full 30 Nm, and lunged back at 3.9 rad/s when let go.
+    """
+    t, q = taught_path()
+    plan = plan_replay(t, q, dyn)
+    replayer = Replayer(plan, dyn, dt=DT)
+    held = plan.q[0].copy()
+    for k in range(round((2.0 + plan.duration) / DT)):
+        command = replayer.step(lt.JointState(k * DT, held, np.zeros(N), None))
+        if replayer.supervisor.state is SupervisorState.FAULT:
+            break
+    reason = replayer.supervisor.fault_reason
+    assert "rad off its reference, more than 0.1 rad: is the arm held or blocked?" in reason
+    np.testing.assert_allclose(command, dyn.gravity(held), atol=1e-9)  # the safe stop
+    off = np.abs(replayer.reference(replayer.time)[0] - held).max()
+    assert 0.1 < off < 0.12  # [rad]: stopped as it passed the bound
 
 
 def test_integral_action_takes_the_friction_the_model_lacks(dyn):

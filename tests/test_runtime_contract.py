@@ -12,7 +12,7 @@ import leadthrough as lt
 from leadthrough.control.constraints import Plane, constraint_torque
 from leadthrough.control.dither import DitherParameters
 from leadthrough.control.parameters import LeadThroughParameters
-from leadthrough.errors import ParameterError
+from leadthrough.errors import ParameterError, RecordingError
 from leadthrough.estimation.observer import MomentumObserver
 from leadthrough.runtime.interface import JointState, RobotInterface
 from leadthrough.runtime.recording import read_recording
@@ -362,6 +362,23 @@ def test_teaching_records_on_any_driver(tmp_path):
     assert recording.tool_wrench_covariance.shape == (100, 6, 6)
     assert all(0.0 <= event.t < 0.4 for event in recording.events)
     assert recording.complete and "recorded 100 periods" in report.summary()
+
+
+def test_teaching_does_not_replace_a_recording_unless_asked(tmp_path):
+    """A second session to the same file: refused before the arm moves, the first kept.
+
+    Before, it was replaced (a session stopped in its calibration left 0 rows of 750).
+    """
+    path = tmp_path / "taught.mcap"
+    teach(pulled_twin(), lt.LeadThrough(ROBOT, "passive"), path, duration=0.2, wall_clock=False)
+    taught = read_recording(path).t.size
+    twin = pulled_twin()
+    with pytest.raises(RecordingError, match="exists; pass overwrite=True"):
+        teach(twin, lt.LeadThrough(ROBOT, "passive"), path, duration=0.1, wall_clock=False)
+    assert read_recording(path).t.size == taught and twin.time == 0.0
+    teach(twin, lt.LeadThrough(ROBOT, "passive"), path, duration=0.1, wall_clock=False,
+          overwrite=True)  # fmt: skip
+    assert read_recording(path).t.size == 25
 
 
 def test_a_ctrl_c_before_the_first_period_holds_the_arm_against_gravity():

@@ -44,7 +44,12 @@ class ReplayParameters:
         time_scale: Replay duration over taught duration [–]: > 1 slower, < 1 faster.
         pause_speed: Every joint slower than this [rad/s], as taught, ...
         pause_time: ... for at least this long [s], as taught, is a pause (a waypoint).
-        approach_time: Duration of the minimum-jerk move to the path start [s].
+        approach_time: Shortest duration of the minimum-jerk move to the path start [s];
+            longer where the arm is far from it (:attr:`Replayer.approach_time`).
+        approach_speed: Largest share of a joint's speed limit the approach may reach [–]
+            (a minimum-jerk move peaks at 1.875 × its mean speed).
+        max_tracking_error: Farthest any joint may be from its reference [rad]; farther
+            is a fault with the safe stop (something holds the arm: a person, an obstacle).
         margin: The path must stay this far inside the position limits [rad] (the
             supervisor's soft walls start ``soft_limit_margin`` inside them).
         bandwidth: Bandwidth of the tracking PD at 250 Hz and faster [Hz] (see
@@ -61,6 +66,8 @@ class ReplayParameters:
     pause_speed: float = 0.01
     pause_time: float = 0.3
     approach_time: float = 2.0
+    approach_speed: float = 0.2
+    max_tracking_error: float = 0.1
     margin: float = 0.02
     bandwidth: float = 4.0
     integral_time: float = 0.1
@@ -68,7 +75,14 @@ class ReplayParameters:
     def __post_init__(self) -> None:
         for name in ("smoothing_time", "approach_time", "margin", "integral_time"):
             real(name, getattr(self, name), minimum=0.0, error=ParameterError)
-        for name in ("time_scale", "pause_speed", "pause_time", "bandwidth"):
+        for name in (
+            "time_scale",
+            "pause_speed",
+            "pause_time",
+            "bandwidth",
+            "approach_speed",
+            "max_tracking_error",
+        ):
             real(name, getattr(self, name), minimum=0.0, strict=True, error=ParameterError)
 
 
@@ -123,7 +137,7 @@ def plan_replay(
     """Plan the replay of a recorded joint path, and check it before anything moves.
 
     Args:
-        t: Recording times [s], (N,), strictly increasing.
+        t: Recording times [s], (N,), increasing (a repeated stamp keeps its first sample).
         q: Recorded joint readings [rad], (N, n).
         dynamics: Model of the arm (limits, inverse dynamics).
         friction: Friction model for the required torque; default the description's.
@@ -174,11 +188,16 @@ def _checked_recording(t: ArrayLike, q: ArrayLike, n: int) -> tuple[FloatArray, 
         k, j = bad[0]
         raise ReplayError(f"joint {j + 1} reading at t = {t[k]:.4g} s (sample {k}) is {q[k, j]}",
                           int(j) + 1)  # fmt: skip
-    steps = np.flatnonzero(np.diff(t) <= 0.0)
+    steps = np.flatnonzero(np.diff(t) < 0.0)
     if steps.size:
         k = steps[0]
         raise ReplayError(f"time not increasing: t[{k + 1}] = {t[k + 1]:.6g} s after t[{k}]")
-    return t, q
+    # a stamp repeated (a coarse clock, which the supervisor takes while teaching): its first
+    # sample stands for it; before, the whole recording was refused
+    first = np.concatenate([[True], np.diff(t) > 0.0])
+    if np.count_nonzero(first) < 2:
+        raise ReplayError(f"a path needs at least 2 times, got {np.count_nonzero(first)}")
+    return t[first], q[first]
 
 
 def _smooth(q: FloatArray, dt: float, smoothing_time: float) -> FloatArray:
@@ -310,17 +329,21 @@ class Replayer:
         self.time, self._steps = 0.0, 0
         self._t0: float | None = None  # the first sample's time on the robot's clock [s]
         self._start: FloatArray | None = None
+        #: Duration of the approach to the path start [s]: ``parameters.approach_time``, or
+        #: longer once the first sample shows the arm farther from the start than that
+        #: allows at ``approach_speed`` of its joints' speed limits
+        self.approach_time = p.approach_time
 
     @property
     def progress(self) -> float:
         """Fraction of the path replayed, in [0, 1] (0 during the approach)."""
-        elapsed = self.time - self.parameters.approach_time
+        elapsed = self.time - self.approach_time
         return float(np.clip(elapsed / max(self.plan.duration, 1e-12), 0.0, 1.0))
 
     @property
     def done(self) -> bool:
         """Whether the path is over and its last pose has been held for 0.5 s."""
-        end = self.parameters.approach_time + self.plan.duration + SETTLE_TIME
+        end = self.approach_time + self.plan.duration + SETTLE_TIME
         return self.time >= end - 1e-9
 
     def warm_up(self) -> float:
@@ -332,9 +355,21 @@ class Replayer:
         replica = Replayer(self.plan, Dynamics(robot), self.friction, self.dt, self.parameters)
         return exercise(replica, self.plan.q[0].copy(), robot.velocity_limits)
 
+    def _approach_time(self, start: FloatArray) -> float:
+        """How long the approach from ``start`` [rad] takes [s] (:attr:`approach_time`).
+
+        A minimum-jerk move of ``Δq`` in ``T`` peaks at ``1.875 Δq / T``: kept below
+        ``approach_speed`` of each joint's speed limit. Before, it always took
+        ``approach_time``: an arm 2.5 rad from the start moved at 2.3 rad/s, one 5.2 rad away
+        at 4.4 rad/s against its 3.14 limit (the supervisor only braked it).
+        """
+        distance = np.abs(self.plan.q[0] - start)
+        limit = self.parameters.approach_speed * self.dynamics.robot.velocity_limits
+        return float(max(self.parameters.approach_time, np.max(1.875 * distance / limit)))
+
     def reference(self, t: float) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Reference (q [rad], q̇ [rad/s], q̈ [rad/s²]) at time ``t`` [s] since the first step."""
-        approach = self.parameters.approach_time
+        approach = self.approach_time
         if t >= approach or self._start is None:
             return self.plan.reference(t - approach)
         phase, rate = minimum_jerk_phase(t, approach)
@@ -382,8 +417,15 @@ class Replayer:
         q, qd = model.q, model.qd
         if self._start is None:
             self._start = q.copy()
+            self.approach_time = self._approach_time(self._start)
         q_ref, qd_ref, qdd_ref = self.reference(self.time)
         error, tracker = q_ref - q, self.tracker
+        off = np.abs(error)
+        if np.max(off) > self.parameters.max_tracking_error:
+            joint = int(np.argmax(off))
+            raise ReplayError(f"joint {joint + 1} is {off[joint]:.3f} rad off its reference, more "
+                              f"than {self.parameters.max_tracking_error:g} rad: is the arm held "
+                              "or blocked?")  # fmt: skip
         self.integral = np.clip(self.integral + self.ki * error * self.dt,
                                 -self._integral_limit, self._integral_limit)  # fmt: skip
         asked = qd_ref + tracker.kp / tracker.kd * error  # the velocity the PD asks for

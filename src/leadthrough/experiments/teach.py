@@ -180,7 +180,7 @@ def replay_recording(
     replayer = Replayer(plan, dynamics, friction, twin.dt)
     sim = simulate(twin, replayer, plan.t[-1] + replayer.parameters.approach_time + 1.0)
     errors = replay_errors(plan, sim.q_true, sim.t, dynamics, sim.flange_position,
-                           replayer.parameters.approach_time)  # fmt: skip
+                           replayer.approach_time)  # fmt: skip
     return sim, errors, replayer
 
 

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from leadthrough.control.lead_through import LeadThrough
+from leadthrough.errors import RecordingError
 from leadthrough.logs.sample import JointState
 from leadthrough.model.description import FloatArray
 from leadthrough.runtime.interface import RobotInterface
@@ -120,6 +121,8 @@ def teach(
     duration: float | None = None,
     parameters: dict[str, Any] | None = None,
     wall_clock: bool = True,
+    *,
+    overwrite: bool = False,
 ) -> TeachingReport:
     """Teach ``robot`` with ``controller`` for ``duration`` [s] (None: until Ctrl-C), recorded.
 
@@ -130,10 +133,14 @@ def teach(
         duration: How long to run [s], calibration included; None: until Ctrl-C.
         parameters: Free-form session parameters stored in the file (mode and dt added).
         wall_clock: False for a simulated driver (see :func:`control_loop`).
+        overwrite: Replace an existing recording at ``path`` (else a RecordingError, before
+            the arm moves: a session that recorded nothing replaced 750 taught rows).
 
     Returns:
         The report; the recording is complete even after Ctrl-C (the safe stop ran).
     """
+    if Path(path).exists() and not overwrite:
+        raise RecordingError(str(path), "exists; pass overwrite=True to replace it")
     stored = {"mode": controller.mode, "dt": controller.dt} | (parameters or {})
     with SessionRecorder(path, controller.robot, stored) as recorder:
         session = TeachingSession(controller, recorder)
