@@ -348,6 +348,35 @@ def test_an_arm_held_back_is_a_fault_not_a_full_torque_push(dyn):
     assert 0.1 < off < 0.12  # [rad]: stopped as it passed the bound
 
 
+def test_a_reset_after_a_fault_approaches_again_from_where_the_arm_is(dyn):
+    """A NaN reading mid-path, the safe stop for 1 s, reset(): a new approach, no jump.
+
+    Before, only the supervisor could be reset while the replay clock ran on: the arm, off
+    a reference that had moved on, jumped to it at 2.7 rad/s (the path's 0.5 rad/s).
+    """
+    t, q = taught_path()
+    plan = plan_replay(t, q, dyn)
+    twin = DigitalTwin(ROBOT, TwinConfig(seed=3), q0=plan.q[0])
+    replayer = Replayer(plan, dyn, dt=twin.dt)
+    path_speed = np.abs(plan.qd).max()
+    fault_at, reset_at = round(3.5 / DT), round(4.5 / DT)
+    speeds, k = [], 0
+    while k <= reset_at or not replayer.done:
+        assert k < reset_at + round((10.0 + plan.duration) / DT)
+        state = twin.read_state()
+        if k == fault_at:
+            state = lt.JointState(state.t, np.full(N, np.nan), state.qd, state.tau_measured)
+        if k == reset_at:
+            assert replayer.supervisor.state is SupervisorState.FAULT
+            replayer.reset()
+        twin.send_torque(replayer.step(state))
+        if k > reset_at:
+            speeds.append(np.abs(twin.truth.qd).max())
+        k += 1
+    assert replayer.supervisor.state is SupervisorState.HOLDING
+    assert max(speeds) <= 1.2 * path_speed  # [rad/s]
+
+
 def test_integral_action_takes_the_friction_the_model_lacks(dyn):
     """The integral takes the friction the model lacks (stiction, cable): joint RMS −40 %."""
     q0 = taught_path()[1][0]

@@ -334,6 +334,20 @@ class Replayer:
         #: allows at ``approach_speed`` of its joints' speed limits
         self.approach_time = p.approach_time
 
+    def reset(self) -> None:
+        """Start the replay afresh from the next sample: a new approach from where the arm is.
+
+        The supervisor's fault is cleared (HOLDING), the integral emptied, the clock and the
+        approach restarted. Before, only the supervisor could be reset: the replay clock had
+        run on through the fault, and the arm, 0.24 rad off a reference that had moved on,
+        jumped to it at 2.7 rad/s (the path's 0.5 rad/s).
+        """
+        self.supervisor.reset()
+        self.supervisor.hold()
+        self.integral = np.zeros(self.dynamics.n)
+        self.time, self._steps, self._t0, self._start = 0.0, 0, None, None
+        self.approach_time = self.parameters.approach_time
+
     @property
     def progress(self) -> float:
         """Fraction of the path replayed, in [0, 1] (0 during the approach)."""
