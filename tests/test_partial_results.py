@@ -1,5 +1,6 @@
 """Nothing partial or defaulted in silence: recovered recordings, bounded work, friction warning."""
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -206,6 +207,11 @@ def test_a_fault_while_teaching_is_not_silent(tmp_path, monkeypatch):
         summary = teach.teach_on_twin(lt.robots.yumi(), tmp_path / "t.mcap", duration=0.8,
                                       friction_file=None)  # fmt: skip
     assert "supervisor fault" in summary
+    # its replay stops where the fault began: the safe stop after it was nobody's teaching
+    monkeypatch.undo()
+    replayed = teach.replay_on_twin(tmp_path / "t.mcap", tmp_path / "replay")
+    assert re.search(r"up to its fault at 0\.2\d s: the safe stop after it is not replayed",
+                     replayed)  # fmt: skip
 
 
 def test_a_session_that_records_nothing_leaves_no_file(tmp_path, monkeypatch):

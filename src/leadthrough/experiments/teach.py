@@ -26,7 +26,7 @@ from leadthrough.friction.model import FrictionModel
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.runtime.interface import JointState
-from leadthrough.runtime.recording import SessionRecorder, read_recording
+from leadthrough.runtime.recording import Recording, SessionRecorder, read_recording
 from leadthrough.runtime.teaching import TeachingSession
 from leadthrough.twin.operator import During
 from leadthrough.twin.presets import REALISTIC_TWIN
@@ -211,19 +211,37 @@ def replay_on_twin(
     if not recording.complete and not partial:
         raise RecordingError(str(recording_path), f"{recording.recovery}; replay what was "
                              "recovered with --partial (partial=True)")  # fmt: skip
-    if len(recording.t) < 2:
-        raise RecordingError(str(recording_path), f"holds {len(recording.t)} samples: nothing "
+    t, q, cut = _until_a_fault(recording)
+    if len(t) < 2:
+        raise RecordingError(str(recording_path), f"holds {len(t)} samples{cut}: nothing "
                              "to replay")  # fmt: skip
-    _at_most("replay", time_scale * float(recording.t[-1] - recording.t[0]), MAX_SECONDS)
+    _at_most("replay", time_scale * float(t[-1] - t[0]), MAX_SECONDS)
     config = replace(REALISTIC_TWIN, seed=seed + 1)
-    sim, errors, _ = replay_recording(recording.robot, recording.t, recording.q, None, config,
-                                      time_scale)  # fmt: skip
+    sim, errors, _ = replay_recording(recording.robot, t, q, None, config, time_scale)
     out.mkdir(parents=True, exist_ok=True)
     _figure(recording.robot, recording.q, sim, out / "replay.png")
-    partial = "" if recording.complete else f" ({recording.recovery})"
+    partial = ("" if recording.complete else f" ({recording.recovery})") + cut
     joint, tool = 1000 * errors["joint_rms"], 1000 * errors["tool_rms"]
     return (f"replayed {recording_path}{partial}: joint RMS {joint:.2f} mrad, tool RMS "
             f"{tool:.2f} mm\nfigure: {out / 'replay.png'}")  # fmt: skip
+
+
+def _until_a_fault(recording: Recording) -> tuple[FloatArray, FloatArray, str]:
+    """(t, q) taught before the supervisor's first fault, and what was cut ("" if nothing).
+
+    After a fault the recording holds the safe stop, not what the hand taught: replayed, it
+    was a path nobody guided (0.26 rad of motion under the stop, replayed silently).
+    """
+    faulted = np.flatnonzero(np.asarray(recording.state) == "fault")
+    if faulted.size == 0:
+        return recording.t, recording.q, ""
+    first = int(faulted[0])
+    when = float(recording.t[first] - recording.t[0])
+    return (
+        recording.t[:first],
+        recording.q[:first],
+        f" (up to its fault at {when:.2f} s: the safe stop after it is not replayed)",
+    )
 
 
 def _figure(robot: RobotDescription, q: FloatArray, sim: SimulationResult, path: Path) -> None:
