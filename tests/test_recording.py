@@ -271,3 +271,34 @@ def test_the_enabling_device_reads_back_and_is_absent_without_one(robot, tmp_pat
             recorder.record(0.004 * k, zeros, zeros, zeros, zeros, zeros, "active", "teaching",
                             enabling=enabling)  # fmt: skip
     assert read_recording(path).enabling == states
+
+
+def test_a_full_disk_at_the_end_names_the_recording(robot, tmp_path):
+    """The summary cannot be written (a full disk): a RecordingError naming the .part file.
+
+    Before, the file's own close, failing alike in the ``finally``, raised a bare
+    ``OSError: [Errno 27] File too large`` over it, naming nothing.
+    """
+    recorder = SessionRecorder(tmp_path / "full.mcap", robot, {"dt": 0.004})
+    q = robot.home()
+    recorder.record(0.0, q, 0 * q, 0 * q, 0 * q, 0 * q, "active", "teaching")
+
+    class Full:
+        """The recorder's file on a disk that is full: flush and close fail."""
+
+        def __init__(self, file) -> None:
+            self.file = file
+
+        def flush(self) -> None:
+            raise OSError(27, "File too large")
+
+        def fileno(self) -> int:
+            return self.file.fileno()
+
+        def close(self) -> None:
+            self.file.close()
+            raise OSError(27, "File too large")
+
+    recorder._file = Full(recorder._file)
+    with pytest.raises(RecordingError, match=r"full\.mcap\.part: cannot write: File too large"):
+        recorder.close()

@@ -346,6 +346,10 @@ def test_an_arm_held_back_is_a_fault_not_a_full_torque_push(dyn):
     np.testing.assert_allclose(command, dyn.gravity(held), atol=1e-9)  # the safe stop
     off = np.abs(replayer.reference(replayer.time)[0] - held).max()
     assert 0.1 < off < 0.12  # [rad]: stopped as it passed the bound
+    stopped_at, then = replayer.progress, replayer.time
+    for k in range(round(plan.duration / DT)):  # the clock runs on: the replay does not
+        replayer.step(lt.JointState(then + (k + 1) * DT, held, np.zeros(N), None))
+    assert replayer.faulted and replayer.done and replayer.progress == stopped_at < 1.0
 
 
 def test_a_reset_after_a_fault_approaches_again_from_where_the_arm_is(dyn):

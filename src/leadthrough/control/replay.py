@@ -24,7 +24,7 @@ from leadthrough.logs.sample import JointState, joint_state
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.model.snapshot import ModelSnapshot
-from leadthrough.safety.supervisor import SafetySupervisor
+from leadthrough.safety.supervisor import SafetySupervisor, SupervisorState
 from leadthrough.trajectories import minimum_jerk_acceleration, minimum_jerk_phase
 from leadthrough.validation import real
 
@@ -333,6 +333,7 @@ class Replayer:
         #: longer once the first sample shows the arm farther from the start than that
         #: allows at ``approach_speed`` of its joints' speed limits
         self.approach_time = p.approach_time
+        self._progress = 0.0
 
     def reset(self) -> None:
         """Start the replay afresh from the next sample: a new approach from where the arm is.
@@ -346,19 +347,33 @@ class Replayer:
         self.supervisor.hold()
         self.integral = np.zeros(self.dynamics.n)
         self.time, self._steps, self._t0, self._start = 0.0, 0, None, None
-        self.approach_time = self.parameters.approach_time
+        self.approach_time, self._progress = self.parameters.approach_time, 0.0
 
     @property
     def progress(self) -> float:
-        """Fraction of the path replayed, in [0, 1] (0 during the approach)."""
+        """Fraction of the path replayed, in [0, 1] (0 during the approach).
+
+        It stops where a fault stopped the replay (it went on to 1 with the clock).
+        """
+        return self._progress
+
+    def _progress_now(self) -> float:
         elapsed = self.time - self.approach_time
         return float(np.clip(elapsed / max(self.plan.duration, 1e-12), 0.0, 1.0))
 
     @property
+    def faulted(self) -> bool:
+        """Whether the supervisor stopped the replay (see ``supervisor.fault_reason``)."""
+        return self.supervisor.state is SupervisorState.FAULT
+
+    @property
     def done(self) -> bool:
-        """Whether the path is over and its last pose has been held for 0.5 s."""
+        """Whether nothing more will be replayed (:attr:`faulted` tells why).
+
+        The path is over and its last pose held for 0.5 s, or a fault stopped it.
+        """
         end = self.approach_time + self.plan.duration + SETTLE_TIME
-        return self.time >= end - 1e-9
+        return self.faulted or self.time >= end - 1e-9
 
     def warm_up(self) -> float:
         """Compile every kernel the step will call, on a replica; return the time [s].
@@ -415,6 +430,8 @@ class Replayer:
         if self._t0 is None:
             self._t0 = float(t)
         self.time = float(t) - self._t0
+        if not self.faulted:
+            self._progress = self._progress_now()
         supervisor, zeros = self.supervisor, np.zeros(self.dynamics.n)
         if not supervisor.check(t, q, qd, tau_measured):
             return supervisor.command(t, q, qd, zeros)

@@ -200,9 +200,10 @@ class SessionRecorder:
             self._file.flush()
             os.fsync(self._file.fileno())
         except OSError as error:
+            with suppress(OSError):  # its own flush fails alike (a full disk): a bare OSError
+                self._file.close()  # of the close hid the error naming the recording
             raise RecordingError(str(self.part_path), f"cannot write: {error.strerror}") from None
-        finally:
-            self._file.close()
+        self._file.close()
         os.replace(self.part_path, self.path)
         _fsync_directory(self.path.parent)
 
