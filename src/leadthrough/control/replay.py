@@ -32,6 +32,12 @@ from leadthrough.validation import real
 SETTLE_TIME = 0.5
 #: The integral torque is clamped to ± this multiple of each joint's Coulomb level [–].
 INTEGRAL_LIMIT = 2.0
+#: A recording that ends moving is brought to rest at this deceleration [rad/s²] ...
+STOP_ACCELERATION = 1.0
+#: ... over at least this long [s] (:func:`_stopped`), from its velocity over its last
+#: ``STOP_WINDOW`` [s].
+STOP_MIN_TIME = 0.5
+STOP_WINDOW = 0.1
 
 
 @dataclass(frozen=True)
@@ -156,8 +162,10 @@ def plan_replay(
     t, q = _checked_recording(t, q, dynamics.n)
     dt = float(np.median(np.diff(t)))
     taught_t = np.arange(int(np.floor((t[-1] - t[0]) / dt + 1e-9)) + 1, dtype=float) * dt
-    q_smooth = _smooth(np.column_stack([np.interp(taught_t, t - t[0], x) for x in q.T]), dt,
-                       p.smoothing_time)  # fmt: skip
+    taught_t, q_taught = _stopped(
+        taught_t, np.column_stack([np.interp(taught_t, t - t[0], x) for x in q.T]), p.pause_speed
+    )
+    q_smooth = _smooth(q_taught, dt, p.smoothing_time)
     qd_taught = np.gradient(q_smooth, dt, axis=0)
     qd, qdd = qd_taught / p.time_scale, np.gradient(qd_taught, dt, axis=0) / p.time_scale**2
     waypoints, segments = _pauses(np.abs(qd_taught).max(axis=1) < p.pause_speed, dt, p.pause_time)
@@ -168,6 +176,33 @@ def plan_replay(
     plan = ReplayPlan(taught_t * p.time_scale, q_smooth, qd, qdd, waypoints, segments, tau, p)
     _check_limits(plan, dynamics.robot, friction, dynamic, gravity)
     return plan
+
+
+def _stopped(t: FloatArray, q: FloatArray, still: float) -> tuple[FloatArray, FloatArray]:
+    """The path (t [s] uniform, q [rad]) brought to rest if it ends moving faster than ``still``.
+
+    A recording cut while the arm moved (Ctrl-C mid-motion, a recovered ``.part``) ended
+    its reference at full speed: the replay then stopped in one period (60 rad/s², 12.7 Nm
+    on joint 2 where the path needed 5.6). The path goes on along its last velocity ``v``,
+    decaying as ``v (1 − s/T)²`` (no step in velocity or acceleration at the end), over
+    ``T`` long enough to decelerate at :data:`STOP_ACCELERATION`; the plan's limits are
+    checked on it as on the rest.
+    """
+    if len(t) < 3:
+        return t, q
+    dt = float(t[1] - t[0])
+    # the last velocity: a line through the last 0.1 s (an encoder's steps read no speed)
+    window = min(len(t), max(3, round(STOP_WINDOW / dt)))
+    x = t[-window:] - t[-window:].mean()
+    velocity = x @ (q[-window:] - q[-window:].mean(axis=0)) / (x @ x)
+    fastest = float(np.max(np.abs(velocity)))
+    if fastest <= still:
+        return t, q
+    duration = max(STOP_MIN_TIME, 2.0 * fastest / STOP_ACCELERATION)
+    s = np.arange(1, int(np.ceil(duration / dt)) + 1) * dt
+    travel = s - s**2 / duration + s**3 / (3.0 * duration**2)  # ∫ (1 − s/T)² ds
+    tail = q[-1] + np.outer(np.minimum(travel, duration / 3.0), velocity)
+    return np.concatenate([t, t[-1] + s]), np.vstack([q, tail])
 
 
 def _checked_recording(t: ArrayLike, q: ArrayLike, n: int) -> tuple[FloatArray, FloatArray]:
