@@ -56,7 +56,7 @@ import pinocchio as pin
 from leadthrough.errors import LeadthroughError, ParameterError
 from leadthrough.estimation.log_observer import measured_torque, resample
 from leadthrough.friction.model import FrictionModel
-from leadthrough.logs.log import JointLog, as_joint_log, one_or_many
+from leadthrough.logs.log import JointLog, joint_logs
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
 from leadthrough.model.pinocchio_model import FLANGE_FRAME
@@ -183,7 +183,7 @@ def estimate_payload(
             separate mass and centre of mass.
         LogInputError: A log without torque or current, or with another joint count.
     """
-    logs = [as_joint_log(log, index) for index, log in enumerate(one_or_many(logs))]
+    logs = joint_logs(logs)
     if not logs:
         raise PayloadError("estimate_payload: no logs given")
     parameters = parameters or PayloadParameters()
@@ -200,7 +200,7 @@ def estimate_payload(
     theta, covariance = loaded.theta, loaded.covariance
     bias, gain = loaded.bias, loaded.gain_bias
     if unloaded is not None:
-        empty = fit([as_joint_log(log, index) for index, log in enumerate(one_or_many(unloaded))])
+        empty = fit(joint_logs(unloaded))
         theta, covariance = theta - empty.theta, covariance + empty.covariance
         bias, gain = bias - empty.bias, gain - empty.gain_bias  # shifted alike in both fits
     systematic = (parameters.model_error**2 * (bias @ bias.T)

@@ -52,7 +52,14 @@ from leadthrough.errors import LeadthroughError, ParameterError
 from leadthrough.filters import low_pass_signal, pole
 from leadthrough.friction.along_travel import level_along_travel, level_error
 from leadthrough.friction.model import FrictionModel, level_stays_positive, sigmoid
-from leadthrough.logs.log import JointLog, as_joint_log, one_or_many, period_problem, rate_problem
+from leadthrough.logs.log import (
+    JointLog,
+    as_joint_log,
+    log_item,
+    one_or_many,
+    period_problem,
+    rate_problem,
+)
 from leadthrough.logs.runs import log_name, refuse_repeated_logs
 from leadthrough.model.description import FloatArray, RobotDescription
 from leadthrough.model.dynamics import Dynamics
@@ -274,10 +281,6 @@ def friction_samples(
     return FrictionSamples(*(np.concatenate(arrays) for arrays in zip(*parts, strict=True)))
 
 
-def _field(log: Any, name: str) -> Any:
-    return log.get(name) if isinstance(log, Mapping) else getattr(log, name, None)
-
-
 def log_field(log: Any, name: str, index: int = 0) -> FloatArray:
     """Array ``name`` of a log given as a mapping or an object."""
     try:
@@ -290,7 +293,7 @@ def log_field(log: Any, name: str, index: int = 0) -> FloatArray:
 def _measured_torque(log: Any, index: int, robot: RobotDescription) -> FloatArray:
     """The log's arm-side torque [Nm]: ``tau``, or ``K · i`` of a log of currents."""
     if not isinstance(log, JointLog):
-        if _field(log, "tau") is not None or _field(log, "current") is None:
+        if log_item(log, "tau") is not None or log_item(log, "current") is None:
             return log_field(log, "tau", index)  # or the line saying it is missing
         log = as_joint_log(log, index)  # currents, as a mapping or an object
     if isinstance(log, JointLog):

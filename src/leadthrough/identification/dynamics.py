@@ -33,7 +33,7 @@ from leadthrough.identification.regressor import (
     regressor_rows,
 )
 from leadthrough.identification.smoothing import smooth_derivative
-from leadthrough.logs.log import as_joint_log, one_or_many
+from leadthrough.logs.log import joint_logs
 from leadthrough.logs.runs import log_name, refuse_repeated_logs
 from leadthrough.model.description import FloatArray, RobotDescription
 
@@ -192,7 +192,7 @@ def smoothed_signals(
 def _stacked_samples(
     logs: Any, robot: RobotDescription, settings: DynamicsSettings
 ) -> tuple[FloatArray, ...]:
-    logs = [as_joint_log(log, index) for index, log in enumerate(one_or_many(logs))]
+    logs = joint_logs(logs)
     if not logs:
         raise DynamicsIdentificationError("no logs given")
     refuse_repeated_logs(logs)

@@ -208,7 +208,7 @@ def as_joint_log(log: Any, index: int = 0) -> JointLog:
         raise ParameterError("logs", f"{log} is a path: read it first, lt.read_log(path)")
 
     def get(name: str) -> Any:
-        return log.get(name) if isinstance(log, Mapping) else getattr(log, name, None)
+        return log_item(log, name)
 
     missing = [name for name in ("t", "q", "qd") if get(name) is None]
     if missing:
@@ -217,6 +217,16 @@ def as_joint_log(log: Any, index: int = 0) -> JointLog:
                              "object with t, q, qd and tau")  # fmt: skip
     return JointLog(get("t"), get("q"), get("qd"), get("tau"), get("current"),
                     source=str(get("source") or ""))  # fmt: skip
+
+
+def log_item(log: Any, name: str) -> Any:
+    """A log's ``name``: a mapping's item or an object's attribute (None: it has none)."""
+    return log.get(name) if isinstance(log, Mapping) else getattr(log, name, None)
+
+
+def joint_logs(logs: Any) -> list[JointLog]:
+    """One log or a list of them, each as a :class:`JointLog` (:func:`as_joint_log`)."""
+    return [as_joint_log(log, index) for index, log in enumerate(one_or_many(logs))]
 
 
 def one_or_many(logs: Any) -> list[Any]:

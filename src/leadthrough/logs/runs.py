@@ -9,13 +9,14 @@ before reading them (:func:`leadthrough.runtime.readers.run_path`).
 
 from __future__ import annotations
 
-from collections.abc import Hashable, Iterable, Mapping, Sequence
+from collections.abc import Hashable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from leadthrough.errors import ParameterError
+from leadthrough.logs.log import log_item
 
 
 def log_name(log: Any, index: int) -> str:
@@ -24,13 +25,8 @@ def log_name(log: Any, index: int) -> str:
     The file is ``JointLog.source``, or a mapping's ``"source"`` (as
     :func:`~leadthrough.friction.logs.load_logs` gives it).
     """
-    source = _attribute(log, "source")
+    source = log_item(log, "source")
     return str(source) if source else f"log {index}"
-
-
-def _attribute(log: Any, name: str) -> Any:
-    """A log's ``name``: a mapping's item or an object's attribute (None: it has none)."""
-    return log.get(name) if isinstance(log, Mapping) else getattr(log, name, None)
 
 
 def run_identity(source: str, t: Any) -> tuple[str, float] | None:
@@ -90,7 +86,7 @@ def refuse_repeated_logs(logs: Sequence[Any]) -> None:
     """
 
     def identity(log: Any) -> Hashable:
-        source = _attribute(log, "source")
-        return run_identity(str(source or ""), _attribute(log, "t")) or ("object", id(log))
+        source = log_item(log, "source")
+        return run_identity(str(source or ""), log_item(log, "t")) or ("object", id(log))
 
     refuse_repeated(("logs", log_name(log, i), identity(log)) for i, log in enumerate(logs))

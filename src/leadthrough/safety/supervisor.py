@@ -117,8 +117,9 @@ class SafetySupervisor:
         self._t_checked: float | None = None  # the latest checked stamp (None: none yet)
         self._stalled = 0  # samples since a checked stamp last came after the latest
         self._stop_periods = 0  # periods of the safe stop sent since the fault
-        self.gravity_scale: FloatArray | None = None  # a measured correction of G (see
-        self.gravity_offset: FloatArray | None = None  # correct_gravity)
+        # the safe stop holds with gravity_scale · G(q) + gravity_offset (correct_gravity)
+        self.gravity_scale: FloatArray | None = None  # [–]
+        self.gravity_offset: FloatArray | None = None  # [Nm]
         self._q_last_good: FloatArray | None = None
         self._in_overrun = False
         p = self.parameters
