@@ -565,3 +565,13 @@ def test_classical_invalid_gain_raises(dynamics, friction):
     """A non-positive K_O raises ParameterError."""
     with pytest.raises(ParameterError):
         ClassicalMomentumObserver(dynamics, friction, dt=DT, gain=0.0)
+
+
+def test_a_friction_model_of_another_arm_is_refused_by_name():
+    """An observer given a friction model with another joint count says so in one line.
+
+    Before, NumPy's broadcasting ValueError came out of the constructor.
+    """
+    ur5 = lt.robots.ur5()
+    with pytest.raises(ParameterError, match=r"friction.*has 7 joints, the robot .* has 6"):
+        lt.MomentumObserver(lt.Dynamics(ur5), FrictionModel.from_robot(lt.robots.yumi()))

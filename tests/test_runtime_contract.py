@@ -580,3 +580,45 @@ def pulling_hand_for_a_test() -> During:
     """A hand pulling the tool 10 cm sideways in 1 s."""
     start = lt.Dynamics(ROBOT).pose(ROBOT.home())[:3, 3]
     return During(Hand(Line(start, start + np.array([0.0, 0.1, 0.0]), duration=1.0)), 0.0, 1.0)
+
+
+@pytest.mark.parametrize(("dt", "period"), [(0.001, 0.004), (0.004, 0.001)])
+def test_samples_at_another_rate_than_dt_are_a_fault(dt, period):
+    """A controller built for 1 kHz fed 250 Hz samples (or the reverse) faults within 1 s.
+
+    Before, step(JointState) took any spacing of stamps: a controller at dt = 1 ms fed
+    samples every 4 ms read a push of 2.5 Nm as 5.9 Nm while the arm accelerated.
+    """
+    controller = lt.LeadThrough(ROBOT, "passive", dt=dt)
+    for k in range(int(1.1 / period)):
+        controller.step(JointState(1e9 + period * k, ROBOT.home(), np.zeros(N), None))
+    assert controller.state is SupervisorState.FAULT
+    reason = str(controller.supervisor.fault_reason)
+    assert f"samples came every {1e3 * period:.3g} ms" in reason, reason
+    assert f"dt = {1e3 * dt:.3g} ms" in reason, reason
+
+
+def test_a_jittery_clock_with_a_gap_is_no_rate_fault():
+    """Stamps that jitter by ±40 % and one gap just under max_time_gap keep the rate check quiet.
+
+    What this prevents: a rate check that faults a real robot's jitter (34 ms at 100 Hz
+    on the public UR10e logs) or one lost stretch of samples the gap check allows.
+    """
+    rng = np.random.default_rng(3)
+    controller, t = lt.LeadThrough(ROBOT, "passive", dt=0.004), 0.0
+    for k in range(1000):
+        t += 0.004 * (1.0 + rng.uniform(-0.4, 0.4)) + (0.24 if k == 300 else 0.0)
+        controller.step(JointState(t, ROBOT.home(), np.zeros(N), None))
+    assert controller.state is not SupervisorState.FAULT, controller.supervisor.fault_reason
+
+
+def test_a_first_sample_with_a_bad_torque_holds_the_arm_where_it_reads():
+    """A first sample whose position is sound but whose torque is NaN: the gravity hold there.
+
+    Before, nothing was held yet, so the safe stop sent zero torque for that period.
+    """
+    q = ROBOT.home() + 0.3
+    controller = lt.LeadThrough(ROBOT, "passive")
+    command = controller.step(JointState(0.0, q, np.zeros(N), np.full(N, np.nan)))
+    assert controller.state is SupervisorState.FAULT
+    np.testing.assert_allclose(command, lt.Dynamics(ROBOT).gravity(q), atol=1e-9)

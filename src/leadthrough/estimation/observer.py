@@ -217,6 +217,9 @@ class MomentumObserver:
     ) -> None:
         self.dynamics = dynamics
         self.friction = friction or FrictionModel.from_robot(dynamics.robot)
+        if self.friction.n_joints != dynamics.n:
+            raise ParameterError("friction", f"has {self.friction.n_joints} joints, the robot "
+                                 f"{dynamics.robot.name} has {dynamics.n}")  # fmt: skip
         self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
         parameters = parameters or ObserverParameters()
         unknown = sorted(set(overrides) - set(parameters.__dict__))

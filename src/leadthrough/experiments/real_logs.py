@@ -67,11 +67,12 @@ def supervisor_verdict(log: JointLog, robot: RobotDescription) -> tuple[float, s
     Returns:
         (time from the log's start [s], the one-line reason) of the first sample it
         would fault on (a reading out of range, non-finite, or stale), or None. Its gaps
-        in time are not judged: they are where the reader dropped corrupted rows, which a
-        live supervisor would have faulted on themselves.
+        in time are not judged, nor the rate they slow: they are where the reader dropped
+        corrupted rows (0.46 s in a second of one public UR10e log), which a live
+        supervisor would have faulted on themselves.
     """
     torque = measured_torque(log, robot)
-    every_gap = SafetyParameters(max_time_gap=None)
+    every_gap = SafetyParameters(max_time_gap=None, rate_tolerance=None)
     supervisor = SafetySupervisor(Dynamics(robot), log.median_period, every_gap)
     for k in range(log.n_samples):
         if not supervisor.check(float(log.t[k]), log.q[k], log.qd[k], torque[k]):

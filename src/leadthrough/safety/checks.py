@@ -116,6 +116,38 @@ def clock_stopped(stalled: int, dt: float, max_gap: float | None) -> str | None:
             "runs backwards")  # fmt: skip
 
 
+#: Seconds of stamps over which the samples' mean period is compared with ``dt`` [s]
+#: (:func:`sample_rate_problem`): long enough that one gap of ``max_time_gap`` (0.25 s)
+#: moves it by at most a third.
+RATE_WINDOW = 1.0
+
+
+def sample_rate_problem(
+    span: float, samples: int, dt: float, tolerance: float | None
+) -> str | None:
+    """Why samples that came at this mean period cannot be taken at ``dt``, or None.
+
+    Args:
+        span: Time from the first stamp of the window to its last [s].
+        samples: Samples that came after the first in that time.
+        dt: The control period the controller integrates with [s].
+        tolerance: ``SafetyParameters.rate_tolerance`` [–] (None: any rate).
+
+    A controller built for one rate and fed another integrates each period's change of
+    momentum over the wrong time: built for 1 kHz and fed 250 Hz samples, it read a push of
+    2.5 Nm as 5.9 Nm while the arm accelerated (the dither, the admittance and the
+    calibration are timed wrongly too).
+    """
+    if tolerance is None or samples < 1:
+        return None
+    period = span / samples
+    if period <= tolerance * dt and period * tolerance >= dt:
+        return None
+    return (f"samples came every {1e3 * period:.3g} ms over the last {span:.3g} s, but the "
+            f"controller runs at dt = {1e3 * dt:.3g} ms (more than {tolerance:g}× apart): "
+            "was it built for another rate?")  # fmt: skip
+
+
 def sample_reason(
     limits: SafetyLimits, q: FloatArray, qd: FloatArray, tau: FloatArray | None
 ) -> str | None:

@@ -41,6 +41,11 @@ class SafetyParameters:
             start-up calibration's integral took it whole: a kick to the torque limits).
             Their jitter reaches 34 ms on the public UR10e logs at 100 Hz. None: no check
             (a log replayed whose gaps are rows dropped as corrupted, up to 0.46 s there).
+        rate_tolerance: The samples' time stamps must advance, on average over each second
+            of them (:data:`~.checks.RATE_WINDOW`), by ``dt`` within this factor either way
+            [–], else a fault: a controller built for another rate than the robot's
+            (:func:`~.checks.sample_rate_problem`). Checked only on stamped samples (the
+            positional ``step(q, q̇, τ)`` counts periods of ``dt``). None: no check.
     """
 
     tool_speed_limit: float = 0.25
@@ -56,6 +61,7 @@ class SafetyParameters:
     position_reading_margin: float = 0.1
     safe_stop_damping_time: float = 0.5
     max_time_gap: float | None = MAX_GAP
+    rate_tolerance: float | None = 1.5
 
     def __post_init__(self) -> None:
         for name in ("tool_speed_limit", "braking_time", "soft_limit_margin", "wall_damping_time"):
@@ -69,6 +75,9 @@ class SafetyParameters:
         real("stale_speed", self.stale_speed, minimum=0.0, strict=True, error=ParameterError)
         if self.max_time_gap is not None:
             real("max_time_gap", self.max_time_gap, minimum=0.0, strict=True,
+                 error=ParameterError)  # fmt: skip
+        if self.rate_tolerance is not None:
+            real("rate_tolerance", self.rate_tolerance, minimum=1.0, strict=True,
                  error=ParameterError)  # fmt: skip
         for name in ("position_reading_margin", "safe_stop_damping_time"):
             real(name, getattr(self, name), minimum=0.0, error=ParameterError)
