@@ -78,6 +78,38 @@ def test_unknown_payload_is_found_and_held(yumi):
     assert np.max(np.abs(sagging.q_true[-1] - sagging.q_true[0])) > 0.05
 
 
+@pytest.mark.parametrize("name", ["yumi", "panda", "ur10e"])
+def test_the_moment_regressor_is_the_gravity_of_a_payload_off_the_flange(name):
+    """``m Y + Y_h m c`` equals G of the arm carrying m at c minus G without it (Pinocchio)."""
+    robot = lt.robots.load(name)
+    run = CalibrationRun(lt.Dynamics(robot), FrictionModel.from_robot(robot), robot.home())
+    q = robot.home() + np.random.default_rng(2).uniform(-0.6, 0.6, robot.n_joints)
+    mass, com = 1.3, np.array([0.04, -0.07, 0.11])
+    carried = lt.Dynamics(robot.with_payload(mass, com)).gravity(q) - lt.Dynamics(robot).gravity(q)
+    predicted = mass * run.payload_regressor(q) + run.moment_regressor(q) @ (mass * com)
+    np.testing.assert_allclose(predicted, carried, atol=1e-9)
+
+
+def test_a_payload_off_the_flange_is_weighed_with_its_moment(yumi):
+    """0.5 kg 6 cm to the side of the flange: its mass, its centre across gravity, and G away.
+
+    Before, a point mass at the flange took the moment's torques: 0.84 kg, and 0.54 Nm of
+    gravity error half a radian from the pose on the joint the moment loads. The centre's
+    component along gravity at the pose (here flange z, 2 cm) turns no joint there: 0.
+    """
+    tool = Payload(0.5, (0.06, 0.0, 0.02))
+    config = TwinConfig(model_error=ModelError(payload=tool), seed=1)
+    controller, _twin, _ = calibrated(yumi, config, seconds=1.5)
+    result = controller.calibration
+    assert result.accepted and result.payload == pytest.approx(0.5, rel=0.1)
+    assert result.payload_com is not None
+    np.testing.assert_allclose(result.payload_com, [0.06, 0.0, 0.0], atol=0.01)
+    away = result.pose + np.array([0.0, 0.0, 0.0, 0.0, 0.5, 0.5, 0.0])  # the wrist turned
+    model = lt.Dynamics(result.robot(yumi)).gravity(away)
+    truth = lt.Dynamics(yumi.with_payload(tool.mass, tool.com)).gravity(away)
+    assert np.max(np.abs(model - truth)) < 0.1  # [Nm]: m g |c_z| = 0.098 Nm at most
+
+
 def test_the_payload_allowed_scales_with_the_arm(yumi):
     """Half the arm's moving mass, unless ``max_payload`` says otherwise.
 

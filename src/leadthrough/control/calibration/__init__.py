@@ -58,11 +58,13 @@ arm's, and taken off every later measurement (``LeadThrough``). With offsets of 
 without this ran away when released in 15 of the 28 LuGre cases in passive mode (8 in
 active mode), up to 6.1 rad.
 
-The gravity error is explained first by a payload at the flange (a point mass ``m``,
-``G_true = G_model + m · Y(q)`` with ``Y = −J_vᵀ g`` the gravity torque of one
-kilogram at the flange), fitted by weighted least squares and taken only where it stands
-out of the gravity error the model may have anyway (:meth:`CalibrationRun.payload`), so
-that it follows the arm to other poses; what remains is a bias at q₀. The Coulomb error
+The gravity error is explained first by a payload (a mass ``m`` at ``c`` in the flange
+frame, ``G_true = G_model + m · Y(q) + Y_h(q) · m c`` with ``Y = −J_vᵀ g`` the gravity
+torque of one kilogram at the flange and ``Y_h = J_ωᵀ [g]× R`` that of its first moment),
+fitted by weighted least squares and taken only where it stands out of the gravity error
+the model may have anyway (:meth:`CalibrationRun.payload`, :meth:`CalibrationRun.payload_body`:
+one pose shows the moment's two components across gravity, not the one along it), so that
+it follows the arm to other poses; what remains is a bias at q₀. The Coulomb error
 rescales the friction model. A level read at q₀ is known there to its readings' scatter,
 and less well the farther the joint travels from q₀
 (:meth:`Calibration.level_error`, :mod:`~leadthrough.friction.measured_level`).

@@ -23,7 +23,7 @@ class Calibration:
         pose: Where it was measured [rad].
         gravity_error: ``G_model − G_true`` at ``pose`` [Nm].
         coulomb_error: ``τ_C,model − τ_C,true`` at ``pose`` [Nm].
-        payload: Payload mass at the flange that explains the gravity error best [kg].
+        payload: Payload mass that explains the gravity error best [kg].
         bias: Gravity error left once the payload is modelled [Nm] (0 on a joint that
             did not slide both ways).
         friction_scale: True over modelled Coulomb level, per joint [–]; a refused
@@ -55,6 +55,10 @@ class Calibration:
             known (0).
         predicted: Joints whose tracking took the state predicted for when their command
             acted (:attr:`CalibrationRun.predicted`). None: not known.
+        payload_com: The payload's centre of mass in the flange frame [m], as far as the
+            pose shows it: its component along gravity there is 0, unseen
+            (:meth:`CalibrationRun.payload_body`). None: at the flange (no payload, or
+            no moment that stood out).
     """
 
     pose: FloatArray
@@ -69,6 +73,7 @@ class Calibration:
     coulomb_spread: FloatArray | None = None
     torque_offset: FloatArray | None = None
     predicted: BoolArray | None = None
+    payload_com: FloatArray | None = None
 
     def summary(self) -> str:
         """One line: what was measured, or why the calibration was refused.
@@ -91,7 +96,10 @@ class Calibration:
         if self.predicted is not None and self.predicted.any():
             joints = ", ".join(str(j + 1) for j in np.flatnonzero(self.predicted))
             ahead = f", joint(s) {joints} tracked one period ahead"
-        return (f"calibrated: payload {self.payload:.2f} kg, Coulomb levels "
+        where = ""
+        if self.payload_com is not None:
+            where = " at ({:.3f}, {:.3f}, {:.3f}) m".format(*self.payload_com)
+        return (f"calibrated: payload {self.payload:.2f} kg{where}, Coulomb levels "
                 f"×{scale.min():.2f}–{scale.max():.2f} of the model, gravity bias up to "
                 f"{np.max(np.abs(self.bias)):.3f} Nm{offset}{ahead}")  # fmt: skip
 
@@ -120,8 +128,11 @@ class Calibration:
         return np.where(self.measured, np.clip(self.friction_scale, 0.0, 1.0), 1.0)
 
     def robot(self, nominal: RobotDescription) -> RobotDescription:
-        """The description with the measured payload."""
-        return nominal.with_payload(self.payload) if self.accepted else nominal
+        """The description with the measured payload (at :attr:`payload_com`)."""
+        if not self.accepted:
+            return nominal
+        com = np.zeros(3) if self.payload_com is None else self.payload_com
+        return nominal.with_payload(self.payload, com)
 
     def friction(self, nominal: FrictionModel, accuracy: float | None = None) -> FrictionModel:
         """The friction model with the measured Coulomb levels.
