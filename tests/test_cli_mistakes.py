@@ -253,6 +253,47 @@ def test_a_joint_or_run_given_twice_is_refused(workdir, argv, says):
     assert says in err
 
 
+@pytest.mark.parametrize(
+    ("argv", "named"),
+    [(["--log", "taught.mcap"], "taught.mcap"),
+     (["--log", "panda_run", "--held-out", "taught.mcap"], "taught.mcap")],
+    ids=lambda value: value if isinstance(value, str) else " ".join(value),
+)  # fmt: skip
+def test_a_teaching_recording_is_refused_as_a_run_to_identify(workdir, argv, named):
+    """A recording of a taught session: one line naming it and why, before any fit.
+
+    A hand was on the arm: its push was fitted as friction, silently.
+    """
+    status, _, err = run(["identify", *argv], workdir)
+    assert_one_line_error(status, err)
+    assert f"{named}: a teaching recording: the hand on the arm" in err
+
+
+def test_held_out_runs_with_one_excitation_log_judge_its_dynamics(workdir):
+    """``--log one.csv --held-out two.csv`` runs the real arm's report with both runs.
+
+    With one excitation log ``--held-out`` was ignored: friction only, no held-out check.
+    """
+    for name in ("exc_one.csv", "exc_two.csv"):
+        (workdir / name).write_text("t,q1,qd1,tau1\n")
+    called = []
+
+    def report(robot, logs, held_out, out):
+        called.append((logs, held_out))
+        return ""
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.chdir(workdir)
+        patch.setattr("leadthrough.cli.identify.run_friction_study", _tripwire)
+        patch.setattr("leadthrough.experiments.real_report.write_logs_report", report)
+        with redirect_stdout(io.StringIO()):
+            assert main(["identify", "--log", "exc_one.csv", "--held-out", "exc_two.csv",
+                         "--out", "held"]) == 0  # fmt: skip
+    fitted, held_out = called[0]
+    assert [path.name for path in fitted] == ["exc_one.csv"]
+    assert [path.name for path in held_out] == ["exc_two.csv"]
+
+
 def test_two_panda_runs_are_not_one_run(workdir):
     """Files of two Panda folders are two runs: past the checks, not refused as one run."""
     with pytest.raises(AssertionError, match="heavy work"):

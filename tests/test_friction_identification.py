@@ -237,6 +237,37 @@ def test_joint_that_never_moved_is_named(short_logs, yumi):
         identify_friction(short_logs, lt.Dynamics(yumi), joints=[1])
 
 
+@pytest.mark.parametrize("joints", [[7], [-1], [1.5], [True]], ids=str)
+def test_a_joint_out_of_range_is_refused_naming_the_range(short_logs, yumi, joints):
+    """``joints`` are 0-based: 7 of the 7-joint YuMi, −1 or 1.5 name the valid range.
+
+    They read "joint 8 never moved", "joint 0 never moved", and 1.5 was truncated to 1.
+    """
+    with pytest.raises(lt.ParameterError, match=r"numbered 0 to 6 here \(0-based; the command "
+                                                r"line's --joints counts 1 to 7\)"):  # fmt: skip
+        identify_friction(short_logs, lt.Dynamics(yumi), joints=joints)
+
+
+def test_friction_pulled_below_zero_is_held_at_0_with_a_warning(yumi):
+    """A joint whose torque sign is flipped: τ_C and c held at 0, with a warning naming it.
+
+    The warning says the likely cause; they were held at 0 silently.
+    """
+    dynamics, dt, joint = lt.Dynamics(yumi), 0.004, 6
+    t = np.arange(0.0, 8.0, dt)
+    q, qd, qdd = np.tile(yumi.home(), (t.size, 1)), np.zeros((t.size, 7)), np.zeros((t.size, 7))
+    q[:, joint] += 0.5 * np.sin(np.pi * t / 2.0)
+    qd[:, joint] = 0.5 * np.pi / 2.0 * np.cos(np.pi * t / 2.0)
+    qdd[:, joint] = -0.5 * (np.pi / 2.0) ** 2 * np.sin(np.pi * t / 2.0)
+    tau = np.array([dynamics.inverse_dynamics(*sample) for sample in zip(q, qd, qdd, strict=True)])
+    tau[:, joint] -= 0.4 * np.sign(qd[:, joint]) + 0.2 * qd[:, joint]  # friction, sign flipped
+    log = {"t": t, "q": q, "qd": qd, "tau": tau}
+    with pytest.warns(UserWarning, match=r"joint 7: fitted Coulomb level and viscous "
+                                         r"coefficient held at 0 .* sign flipped"):  # fmt: skip
+        model, _ = identify_friction([log], dynamics, [joint])
+    assert model.coulomb[joint] < 1e-9 and model.viscous[joint] < 1e-9
+
+
 def test_unreadable_log_file(tmp_path):
     """A missing or garbled log file raises LogFileError naming the file."""
     with pytest.raises(LogFileError, match="no such file"):

@@ -95,9 +95,14 @@ def test_synthetic_prediction_reaches_noise_level_on_held_out(synthetic, nominal
 
 
 def test_synthetic_residual_matches_the_noise(synthetic):
-    """The fit's residual RMS per joint is the injected noise (neither under- nor over-fitted)."""
+    """The residual RMS per joint is the injected noise (neither under- nor over-fitted).
+
+    It is the saved description's, whose inertials are made physical: that costs joint 2
+    here (0.45 Nm; the fit before it had 0.30), so its bound is wider.
+    """
     report = synthetic[4]
-    np.testing.assert_allclose(report.residual_rms, NOISE, rtol=0.3)
+    np.testing.assert_allclose(np.delete(report.residual_rms, 1), NOISE, rtol=0.3)
+    assert NOISE <= report.residual_rms[1] < 1.6 * NOISE
     np.testing.assert_allclose(report.gain_scale, 1.0, atol=0.05)
 
 
@@ -182,6 +187,37 @@ def test_a_joint_without_rows_is_reported_as_nominal():
     first, second = str(report).splitlines()[1:]
     assert "0.100" in first
     assert "1.000" not in second and "–" in second and "nominal" in second
+
+
+def test_a_joint_without_rows_keeps_the_priors_noise(nominal):
+    """A joint that never moved keeps the prior's σ in the description (it was 1.0 Nm)."""
+    log, _ = _log(nominal, 4, duration=10.0)
+    q, qd = log.q.copy(), log.qd.copy()
+    q[:, 4], qd[:, 4] = nominal.home()[4], 0.0
+    identified, report = lt.identify_dynamics(lt.JointLog(t=log.t, q=q, qd=qd, tau=log.tau),
+                                              nominal)  # fmt: skip
+    assert report.samples[4] == 0
+    assert identified.joints[4].friction.noise_std == nominal.joints[4].friction.noise_std
+
+
+def test_friction_fitted_negative_warns_and_the_rms_is_the_saved_models(nominal):
+    """A flipped torque sign: τ_C and c saved as 0 with a warning, the RMS the saved model's.
+
+    The reported RMS is the saved description's prediction error on the fitted rows; it
+    was the unclamped fit's (on the reviewer's arm 0.08 Nm reported, 1.2 Nm saved).
+    """
+    log, _ = _log(nominal, 3, duration=20.0)
+    tau = log.tau.copy()
+    tau[:, 3] *= -1.0
+    flipped = lt.JointLog(t=log.t, q=log.q, qd=log.qd, tau=tau)
+    settings = lt.DynamicsSettings(gain_std=0.0)  # g = 1: the log's units are the model's
+    with pytest.warns(UserWarning, match=r"identify_dynamics: joint 4: fitted Coulomb level"):
+        identified, report = lt.identify_dynamics(flipped, nominal, settings=settings)
+    assert identified.joints[3].friction.coulomb == 0.0
+    error = prediction_error(flipped, identified, report.offset)
+    rows = np.abs(smooth_derivative(log.t, log.qd, settings.bandwidth)[0]) >= 0.05
+    saved = [np.sqrt(np.mean(error[rows[:, j], j] ** 2)) for j in range(6)]
+    np.testing.assert_allclose(report.residual_rms, saved, rtol=1e-6)
 
 
 def test_a_gains_std_counts_the_scale_the_data_cannot_see():

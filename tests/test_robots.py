@@ -104,6 +104,22 @@ def test_given_drive_data_are_not_assumed(tmp_path):
     np.testing.assert_array_equal(robot.home(), [0.1, 0.2, 1.0])
 
 
+def test_friction_without_its_noise_assumes_the_noise_and_says_so(tmp_path):
+    """Drive data with τ_C and c but no ``noise_std``: σ is assumed, 0.05 τ_C, and named.
+
+    It was 0, silently: no noise band on any joint. Given, it is not named.
+    """
+    drive = tmp_path / "drive.toml"
+    drive.write_text("coulomb = [1.0, 2.0, 0.5]\nviscous = [0.5, 0.5, 0.2]\n")
+    robot, caught = quietly(lt.robots.from_urdf, THREE_JOINT, drive_data=drive)
+    assert [joint.friction.noise_std for joint in robot.joints] == pytest.approx([0.05, 0.1, 0.025])
+    assert "friction noise σ [0.05, 0.1, 0.025] Nm (0.05 × τ_C)" in str(caught[0].message)
+    drive.write_text("coulomb = [1.0, 2.0, 0.5]\nnoise_std = [0.2, 0.2, 0.2]\n")
+    robot, caught = quietly(lt.robots.from_urdf, THREE_JOINT, drive_data=drive)
+    assert [joint.friction.noise_std for joint in robot.joints] == [0.2, 0.2, 0.2]
+    assert "noise" not in str(caught[0].message)
+
+
 def test_continuous_joints_and_a_singular_home_are_stated(robots_dir, tmp_path):
     """The Kinova's continuous joints get ±2π, its assumed home points straight up: both named.
 

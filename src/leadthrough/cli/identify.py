@@ -56,6 +56,28 @@ def refuse_repeated_runs(logs: Sequence[Path], held_out: Sequence[Path] = ()) ->
     refuse_repeated((option, str(path), run_path(Path(path))) for option, path in named)
 
 
+def refuse_taught_recordings(paths: Sequence[Path]) -> None:
+    """Refuse a teaching recording (``.mcap``) as a run to identify from or judge on.
+
+    A hand was on the arm: the motor torques balance its dynamics plus the operator's
+    push, which the fit would take for friction and inertia. Every recording the project
+    writes is of a taught session (``teach``, ``demo``, ``run_teaching``); replays and
+    excitations are not recorded, so no recording is one nobody touched.
+
+    Raises:
+        LogError: A path is a recording, named with what to give instead.
+    """
+    from leadthrough.logs.rows import LogError
+    from leadthrough.runtime.readers import detect_format
+
+    for path in paths:
+        if detect_format(Path(path)) == "recording":
+            raise LogError(
+                f"{path}: a teaching recording: the hand on the arm would be fitted "
+                "as friction; identify from a log nobody touched (an excitation)"
+            )
+
+
 def identify(
     robot: RobotDescription,
     out: Path,
@@ -93,13 +115,16 @@ def identify(
 def real_logs(paths: Sequence[Path] | None, held_out: Sequence[Path] = ()) -> bool:
     """Whether ``--log`` names a real arm's runs (anything but one project excitation log).
 
+    With ``held_out`` runs, one excitation log is a run too: the held-out runs judge the
+    dynamics, which only a real arm's runs identify (they were ignored).
+
     Raises:
         LogError: A file is in no known log format (found before any work starts).
     """
     from leadthrough.runtime.readers import detect_format
 
     formats = [detect_format(Path(path)) for path in [*(paths or []), *held_out]]
-    return bool(paths) and (len(paths) > 1 or formats[0] != "excitation")
+    return bool(paths) and (len(paths) > 1 or bool(held_out) or formats[0] != "excitation")
 
 
 def identify_real(args: object) -> str:

@@ -59,6 +59,7 @@ def _identify(args: argparse.Namespace) -> int:
         parse_joints,
         real_logs,
         refuse_repeated_runs,
+        refuse_taught_recordings,
     )
 
     refuse_repeated_runs(args.log or [], args.held_out)
@@ -68,6 +69,7 @@ def _identify(args: argparse.Namespace) -> int:
         raise ParameterError("--realdata", "give either --realdata or --log, not both")
     if args.realdata is not None or real_logs(args.log, args.held_out):
         _refuse_twin_options(args)
+        refuse_taught_recordings([*(args.log or []), *args.held_out])
         print(identify_real(args))
         return 0
     robot = arg.robot_from(args)
@@ -220,8 +222,8 @@ def build_parser() -> argparse.ArgumentParser:
         type=arg.existing_log,
         nargs="+",
         help="read logs instead of the twin: the project's excitation logs (.csv or .npz), or"
-        " a real arm's runs (UR CSV, a Panda text folder, .mcap) to identify friction and"
-        " dynamics",
+        " a real arm's runs (UR CSV, a Panda text folder) to identify friction and dynamics"
+        " (not a teaching recording, .mcap: a hand was on the arm)",
     )
     identify.add_argument("--held-out", type=arg.existing_log, nargs="+", default=[],
                           help="runs not fitted, to judge the identified dynamics on")  # fmt: skip

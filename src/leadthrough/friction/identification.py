@@ -41,6 +41,7 @@ Parameter standard deviations come from the least-squares covariance.
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -72,6 +73,8 @@ MIN_LEVEL = 0.1
 #: Each direction's least share of a joint's sliding samples for the fit to separate what
 #: does not change sign with the motion (:func:`unsigned_basis`) from friction [–].
 BOTH_WAYS = 0.25
+#: A fitted τ_C [Nm] or c [Nm s/rad] at or below this sits on its bound, 0.
+ON_BOUND = 1e-9
 
 
 class IdentificationError(LeadthroughError, ValueError):
@@ -185,7 +188,7 @@ def identify_friction(
         robot: The robot description (its model is built here), or its model
             (:class:`Dynamics`), used to remove gravity and inertia torques.
         dynamics: The same, by its former name (``dynamics=`` still works).
-        joints: Joints to identify (default: every joint that moved in some log and
+        joints: Joints to identify, 0-based (default: every joint that moved in some log and
             slid for at least ``settings.minimum_samples`` samples; a joint that only
             twitched is left at the prior rather than failing the whole fit).
         settings: Thresholds of the fit.
@@ -200,7 +203,13 @@ def identify_friction(
         IdentificationError: A log is malformed, no joint moved, or a requested joint
             never moved.
         ParameterError: A log is given twice: the same object, or one run read twice
-            (:func:`~leadthrough.logs.runs.refuse_repeated_logs`).
+            (:func:`~leadthrough.logs.runs.refuse_repeated_logs`); a joint is no index
+            0 … n − 1.
+
+    Warns:
+        UserWarning: Per joint whose τ_C sits on its bound 0: a current or torque of the
+            wrong sign, a wrong torque constant or a poor rigid-body model is the likely
+            cause.
     """
     settings = settings or IdentificationSettings()
     model = robot if robot is not None else dynamics
@@ -232,7 +241,7 @@ def fit_friction(
         if not joints:
             raise IdentificationError(f"no joint slid faster than {settings.sliding_velocity:g}"
                                       f" rad/s for {settings.minimum_samples} samples")  # fmt: skip
-    joints = tuple(int(j) for j in joints)
+    joints = _valid_joints(joints, dynamics.n)
     for j in joints:
         if j not in moved:
             raise IdentificationError(f"joint {j + 1} never moved faster than "
@@ -250,6 +259,23 @@ def fit_friction(
     for j in joints:
         _fit_joint(j, samples, dynamics, settings, values, report)
     return FrictionModel(**values), report
+
+
+def _valid_joints(joints: Sequence[Any], n: int) -> tuple[int, ...]:
+    """``joints`` as indices, each an integer 0 … n − 1.
+
+    Raises:
+        ParameterError: One is not (7 of a 6-joint arm read "joint 7 never moved", −1
+            "joint 0", 1.5 was truncated to 1).
+    """
+    if not all(isinstance(j, int | np.integer) and not isinstance(j, bool) and 0 <= j < n
+               for j in joints):  # fmt: skip
+        raise ParameterError(
+            "joints",
+            f"joints are numbered 0 to {n - 1} here (0-based; the "
+            f"command line's --joints counts 1 to {n}), got {list(joints)}",
+        )
+    return tuple(int(j) for j in joints)
 
 
 def _sliding_count(samples: FrictionSamples, j: int, settings: IdentificationSettings) -> int:
@@ -391,6 +417,7 @@ def _fit_joint(
                                                     False, unsigned[sliding])  # fmt: skip
     tau = tau - unsigned @ offset  # what does not change sign with the motion is not friction
     coulomb, viscous = theta[0], theta[-1]
+    _warn_on_bound(j, coulomb, viscous)
     values["coulomb"][j], values["viscous"][j] = coulomb, max(viscous, 0.0)
     values["noise_std"][j] = float(np.std(residual))
     values["position_mid"][j], values["position_half_range"][j] = mid, half
@@ -420,6 +447,20 @@ def _fit_joint(
                                     values["noise_std"][j], tau[slow], prior)  # fmt: skip
         (values["slope"][j], values["half_width"][j]) = params
         report.parameter_std["slope"][j], report.parameter_std["half_width"][j] = std
+
+
+def _warn_on_bound(j: int, coulomb: float, viscous: float) -> None:
+    """A warning if joint ``j``'s τ_C sits on its bound 0 (the data pull it negative).
+
+    A c alone at 0 is not warned about: a small one the data cannot tell from 0 (the
+    Panda's joints 2, 5 and 6; its published c of joint 6 is negative).
+    """
+    if coulomb > ON_BOUND:
+        return
+    what = "Coulomb level" + (" and viscous coefficient" if viscous <= ON_BOUND else "")
+    warnings.warn(f"identify_friction: joint {j + 1}: fitted {what} held at 0 (the data pull "
+                  "it negative): is its current or torque sign flipped, its torque constant "
+                  "wrong, or the rigid-body model far off?", stacklevel=5)  # fmt: skip
 
 
 def _level(values: dict[str, FloatArray], j: int, u: FloatArray) -> FloatArray:

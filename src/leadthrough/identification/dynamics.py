@@ -18,6 +18,7 @@ its residual RMS, estimated in a first pass and used as its weight in the second
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -30,6 +31,7 @@ from leadthrough.identification.regressor import (
     BLOCKS,
     described,
     inertial_parameters,
+    parameters_of,
     regressor_rows,
 )
 from leadthrough.identification.smoothing import smooth_derivative
@@ -79,7 +81,8 @@ class DynamicsReport:
     """What the fit found, per joint (arrays of n).
 
     Attributes:
-        residual_rms: Torque residual RMS on the fitted rows [Nm].
+        residual_rms: Torque residual RMS on the fitted rows [Nm], of the description
+            returned (a negative τ_C or c held at 0 there), not of the unconstrained fit.
         nominal_rms: The same rows' residual with the prior (nominal) parameters [Nm].
         samples: Rows used per joint [–].
         gain_scale: Drive-gain scale g (identified K = g K_nominal) [–].
@@ -138,6 +141,10 @@ def identify_dynamics(
         The description carrying the identified parameters (torque constants scaled by
         the gain when the description has them) and the fit report.
 
+    Warns:
+        UserWarning: Per joint whose fitted τ_C is negative (held at 0): a current or
+            torque of the wrong sign, or a wrong torque constant, is the likely cause.
+
     Raises:
         DynamicsIdentificationError: A log has no torque, the wrong joint count, or
             fewer than 20 samples.
@@ -166,12 +173,34 @@ def identify_dynamics(
         noise = _per_joint_rms(measured - predicted / gain[joint], joint, n)
     if gain_std > 0.0:
         gain_sd = _gain_std(rows, measured, noise[joint], joint, x, gain, (prior_std, gain_std))
-    identified = described(robot, x, friction, noise, gain)
+    _warn_negative_friction(x, n)
+    offset, block_std = _blocks(x, std, n)
+    # the residual of the model saved (friction held at 0, inertials made physical), not x's
+    saved = parameters_of(described(robot, x, friction, noise, gain), offset)
+    residual_rms = _per_joint_rms(measured - rows @ saved / gain[joint], joint, n)
+    samples = np.bincount(joint, minlength=n).astype(float)
+    # a joint without rows keeps the prior's noise, as it keeps its other values
+    identified = described(robot, x, friction, np.where(samples > 0, residual_rms,
+                                                        friction.noise_std), gain)  # fmt: skip
     fraction = 1.0 - std[: 10 * n] / prior_std[: 10 * n]
     rms = _per_joint_rms(nominal_residual, joint, n)
-    report = DynamicsReport(noise, rms, np.bincount(joint, minlength=n).astype(float), gain,
-                            gain_sd, *_blocks(x, std, n), fraction)  # fmt: skip
+    report = DynamicsReport(residual_rms, rms, samples, gain, gain_sd, offset, block_std,
+                            fraction)  # fmt: skip
     return identified, report
+
+
+def _warn_negative_friction(x: FloatArray, n: int) -> None:
+    """One warning per joint whose fitted τ_C is negative (the description holds 0).
+
+    A c alone below 0 is not warned about: a small one the data cannot tell from 0.
+    """
+    first = 10 * n + BLOCKS.index("coulomb") * n
+    coulomb, viscous = x[first : first + n], x[first + n : first + 2 * n]
+    for j in np.flatnonzero(coulomb < 0.0):
+        what = "Coulomb level" + (" and viscous coefficient" if viscous[j] < 0.0 else "")
+        warnings.warn(f"identify_dynamics: joint {j + 1}: fitted {what} negative, saved as 0: "
+                      "is its current or torque sign flipped, or its torque constant wrong?",
+                      stacklevel=3)  # fmt: skip
 
 
 def smoothed_signals(

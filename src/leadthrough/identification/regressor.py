@@ -120,3 +120,15 @@ def described(
             torque_constant=None if constant is None else constant * float(gain[i]),
         ))  # fmt: skip
     return replace(robot, joints=tuple(joints))
+
+
+def parameters_of(robot: RobotDescription, offset: FloatArray) -> FloatArray:
+    """``x`` (layout of :func:`regressor_rows`) of what ``robot`` carries, and ``offset``.
+
+    Of a :func:`described` description, the parameters as saved, not as fitted: a
+    negative τ_C, c or rotor inertia held at 0, inertials made physical.
+    """
+    friction = [joint.friction for joint in robot.joints]
+    return np.concatenate([inertial_parameters(robot), robot.reflected_rotor_inertias,
+                           [f.coulomb for f in friction], [f.viscous for f in friction],
+                           offset])  # fmt: skip

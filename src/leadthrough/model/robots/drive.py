@@ -15,6 +15,8 @@ reflected rotor     2e-3 s² · τ_max [kg m²]                YuMi 2.6e-4…2.7
 inertia G_r² J_m                                           1.1e-2, Panda 1.1e-3…8.3e-3 per Nm
 Coulomb level τ_C   0.03 · τ_max [Nm]                      YuMi 1.3…5 %, UR10e 3.3…4 %
 viscous c           0.02 s/rad · τ_max [Nm s/rad]          YuMi 0.003…0.037, UR10e 0.04…0.07
+friction noise σ    0.05 · τ_C [Nm] (also when the data    thesis Table 4.1
+                    give τ_C but not σ)
 home pose           0 where 0 is ≥ 10 % of the range       —
                     inside the limits, else mid-range
 ==================  =====================================  ==================================
@@ -172,6 +174,8 @@ def complete_drive_data(
         robot = _applied(robot, data, drive_data)
         assumed_by_file = list(data.get("assumed", []))
         missing = missing - _supplied(data)
+        if "coulomb" in data and "noise_std" not in data:  # σ = 0: no noise band at all
+            missing = missing | {"noise_std"}
     robot, notes = _assume(robot, missing)
     notes = [*_limit_notes(robot, assumed_limits or {}), *notes]
     if assumed_by_file:
@@ -226,6 +230,12 @@ def _assume(robot: RobotDescription, missing: set[str]) -> tuple[RobotDescriptio
         notes.append(f"Coulomb friction {_values(COULOMB_PER_TORQUE_LIMIT * limits)} Nm "
                      f"({COULOMB_PER_TORQUE_LIMIT:g} × torque limit), viscous "
                      f"{_values(VISCOUS_PER_TORQUE_LIMIT * limits)} Nm s/rad")  # fmt: skip
+    if "noise_std" in missing:
+        noise = ASSUMED_NOISE_FRACTION * np.array([joint.friction.coulomb for joint in joints])
+        joints = [dataclasses.replace(joint, friction=dataclasses.replace(joint.friction,
+                                                                          noise_std=float(s)))
+                  for joint, s in zip(joints, noise, strict=True)]  # fmt: skip
+        notes.append(f"friction noise σ {_values(noise)} Nm ({ASSUMED_NOISE_FRACTION:g} × τ_C)")
     home = robot.home_position
     if "home" in missing:
         home = _assumed_home(robot.q_min, robot.q_max)
