@@ -327,3 +327,35 @@ def test_an_excitation_file_is_named_in_the_errors_with_its_joint_count(short_lo
         identify_friction([loaded], lt.Dynamics(lt.robots.yumi()))
     with pytest.raises(IdentificationError, match=r"mine\.npz: 7 joints, but ur10e has 6"):
         identify_friction([loaded], lt.Dynamics(lt.robots.ur10e()))
+
+
+def test_the_joints_identified_are_saved_and_the_others_count_as_unmeasured(
+    short_logs, yumi, tmp_path
+):
+    """Joint 7 alone identified: the file says so, and the controller widens the others.
+
+    Before, a file with one joint fitted made ``LeadThrough`` take every joint's level as
+    measured on this arm (0.2 of error where nobody measured it, instead of 0.35); a file
+    that does not say (written before) still counts whole.
+    """
+    model, _ = identify_friction(short_logs, lt.Dynamics(yumi), joints=[6])
+    assert model.identified.tolist() == [False] * 6 + [True]
+    model.save(tmp_path / "friction.toml")
+    loaded = lt.FrictionModel.load(tmp_path / "friction.toml")
+    assert loaded.identified.tolist() == model.identified.tolist()
+    parameters = lt.LeadThroughParameters()
+    error = lt.LeadThrough(yumi, "active", friction=loaded).law.friction_error
+    np.testing.assert_allclose(error[:6], parameters.unmeasured_friction_error)
+    assert error[6] < 0.1  # its own, measured along the stroke
+    unstated = lt.FrictionModel(**{**loaded.to_dict(), "identified": None})
+    whole = lt.LeadThrough(yumi, "active", friction=unstated).law.friction_error
+    assert np.all(whole[:6] < parameters.unmeasured_friction_error)
+
+
+def test_identified_flags_of_another_length_are_refused_naming_the_file(yumi, tmp_path):
+    """``identified`` must hold one boolean per joint: a file that does not is one line."""
+    path = tmp_path / "friction.toml"
+    lt.FrictionModel.from_robot(yumi).save(path)
+    path.write_text(path.read_text() + "identified = [true, false]\n")
+    with pytest.raises(lt.RobotDescriptionError, match=r"friction\.identified.*7 booleans"):
+        lt.FrictionModel.load(path)

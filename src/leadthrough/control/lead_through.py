@@ -128,12 +128,17 @@ class LeadThrough:
         #: and the calibration build on
         self._carrying = robot
         self.dt = real("dt", dt, minimum=0.0, strict=True, error=ParameterError)
-        #: which joints' friction levels were measured on this arm: all of a given model's
-        self._identified = np.full(robot.n_joints, friction is not None)
+        self._given_friction = friction is not None
         friction = friction or FrictionModel.from_robot(robot)
         if friction.n_joints != robot.n_joints:
             raise ParameterError("friction", f"has {friction.n_joints} joints, the robot "
                                              f"{robot.n_joints}")  # fmt: skip
+        #: which joints' friction levels were measured on this arm: those a given model
+        #: states (``FrictionModel.identified``), all of one that does not, none of the
+        #: description's
+        self._identified = np.full(robot.n_joints, self._given_friction)
+        if self._given_friction and friction.identified is not None:
+            self._identified = friction.identified.copy()
         self.nominal_friction = friction
         self.constraints = tuple(constraints)
         for constraint in self.constraints:
@@ -432,22 +437,24 @@ class LeadThrough:
         level by 16–30 % against a stated 6 %, ran on 370 mrad (no calibration). A level
         without a shape (no position terms, as the identification leaves a joint whose
         stroke was too short to fit one) holds no end value: its error stays its own.
-        None for the nominal model, or without a slope.
+        A joint the identification did not fit (``FrictionModel.identified``) keeps its
+        unmeasured error everywhere. None for the nominal model, or without a slope.
         """
         calibration = self.parameters.calibration
-        if not self._identified.all() or calibration is None or calibration.level_slope is None:
+        if not self._identified.any() or calibration is None or calibration.level_slope is None:
             return None
         friction, error = self.nominal_friction, self.law.friction_error.copy()
         far = np.maximum(error, self.parameters.unmeasured_friction_error)
-        # a level without a shape (no position terms) holds no end value: no stroke
+        # a level without a shape (no position terms) holds no end value: no stroke; nor
+        # does one nobody identified (its error is already ``far``)
         shaped = (friction.position_linear != 0.0) | (friction.position_quadratic != 0.0)
-        span = np.where(shaped, friction.position_half_range, np.inf)
+        span = np.where(shaped & self._identified, friction.position_half_range, np.inf)
         return MeasuredLevelError(friction.position_mid.copy(), error, far,
                                   float(calibration.level_slope), span)  # fmt: skip
 
     def _replica(self, calibrate: bool) -> LeadThrough:
         """A new controller built from this one's robot, friction, parameters, constraints."""
-        friction = self.nominal_friction if self._identified.all() else None
+        friction = self.nominal_friction if self._given_friction else None
         return LeadThrough(self.robot, self.mode, self.dt, friction, self.parameters,
                            self.constraints, calibrate)  # fmt: skip
 

@@ -258,6 +258,7 @@ def fit_friction(
     report = _empty_report(n, joints)
     for j in joints:
         _fit_joint(j, samples, dynamics, settings, values, report)
+    values["identified"] = np.isin(np.arange(n), joints)
     return FrictionModel(**values), report
 
 

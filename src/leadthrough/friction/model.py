@@ -121,6 +121,11 @@ class FrictionModel:
             than ``stribeck_velocity`` may be, as a fraction of it [–], ≥ 0 (it widens the
             band, not the mean; 0: the thesis' model).
         stribeck_velocity: v_s, the speed over which that excess fades [rad/s], > 0.
+        identified: Per joint, whether an identification measured its friction on this
+            arm (``leadthrough identify`` sets it: a joint it did not fit keeps its prior's
+            values, a data sheet's); None: not stated, as in files written before it was
+            saved. ``LeadThrough`` counts a joint's level as measured where it is True, and
+            on every joint of a model given to it that does not state it.
     """
 
     coulomb: FloatArray
@@ -135,6 +140,7 @@ class FrictionModel:
     relative_error: FloatArray = _FILLED_IN
     stiction_excess: FloatArray = _FILLED_IN
     stribeck_velocity: FloatArray = _FILLED_IN
+    identified: NDArray[np.bool_] | None = None
 
     def __post_init__(self) -> None:
         given = {name: getattr(self, name)
@@ -159,6 +165,12 @@ class FrictionModel:
         _require("position_half_range", self.position_half_range > 0.0, "> 0")
         _require("position_linear", level_stays_positive(self.position_linear,
                  self.position_quadratic), "such that τ_C(q) > 0 over the whole range")  # fmt: skip
+        if self.identified is not None:
+            flags = np.asarray(self.identified)
+            if flags.shape != (n,) or flags.dtype != np.bool_:
+                raise ParameterError("identified", f"must be {n} booleans, one per joint, "
+                                     f"got {self.identified!r}")  # fmt: skip
+            object.__setattr__(self, "identified", flags.copy())
 
     @cached_property
     def _half_slope(self) -> FloatArray:
@@ -350,11 +362,15 @@ class FrictionModel:
                 f"{self.half_width[j]:.2e}", f"{self.noise_std[j]:.4f}",
                 f"{self.position_linear[j]:.3f}", f"{self.position_quadratic[j]:.3f}"]  # fmt: skip
 
-    def to_dict(self) -> dict[str, list[float]]:
-        """Plain-data form (lists per parameter) for TOML."""
+    def to_dict(self) -> dict[str, list[float] | list[bool]]:
+        """Plain-data form (lists per parameter) for TOML; ``identified`` where stated."""
         names = _PARAMETERS + _ERROR + _STRIBECK + (_POSITION if self.has_position_dependence
                                                     else ())  # fmt: skip
-        return {name: getattr(self, name).tolist() for name in names}
+        plain: dict[str, list[float] | list[bool]] = {name: getattr(self, name).tolist()
+                                                      for name in names}  # fmt: skip
+        if self.identified is not None:
+            plain["identified"] = self.identified.tolist()
+        return plain
 
     def save(self, path: str | Path) -> None:
         """Write the parameters to a TOML file (a ``[friction]`` table of per-joint lists)."""
