@@ -22,7 +22,7 @@ demo: $(STAMP)
 	$(BIN)/leadthrough demo
 
 test: $(STAMP)
-	@# one worker per core (pytest-xdist): 5 min on 2 cores, 8.5 min on one
+	@# one worker per core (pytest-xdist): 3.5–6 min on 2 cores, 8.5 min on one
 	$(BIN)/python -m pytest -q -n auto
 
 bench: $(STAMP)
