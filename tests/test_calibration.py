@@ -110,6 +110,21 @@ def test_a_payload_off_the_flange_is_weighed_with_its_moment(yumi):
     assert np.max(np.abs(model - truth)) < 0.1  # [Nm]: m g |c_z| = 0.098 Nm at most
 
 
+def test_a_heavy_tool_the_model_lacks_is_named_when_it_sinks_the_calibration(ur10e):
+    """A UR10e's 5 kg tool 10 cm out, not given: refused, and the refusal names the tool.
+
+    The wrist sinks ~64 mrad before the tracking's integral holds it. The refusal asked
+    only "was the arm touched?"; the likelier cause, and its remedy, are named now.
+    """
+    tool = ModelError(payload=Payload(5.0, (0.0, 0.0, 0.1)))
+    controller = LeadThrough(ur10e, calibrate=True)
+    simulate(DigitalTwin(ur10e, TwinConfig(model_error=tool)), controller, 0.5)
+    result = controller.calibration
+    assert not result.accepted
+    assert re.search(r"joint 4 was \d+ mrad off the calibration motion: a payload the model "
+                     r"lacks \(give it with set_payload\(mass, com\)\)", result.reason)  # fmt: skip
+
+
 def test_the_payload_allowed_scales_with_the_arm(yumi):
     """Half the arm's moving mass, unless ``max_payload`` says otherwise.
 
