@@ -83,7 +83,10 @@ class DynamicsReport:
     Attributes:
         residual_rms: Torque residual RMS on the fitted rows [Nm], of the description
             returned (a negative τ_C or c held at 0 there), not of the unconstrained fit.
-        nominal_rms: The same rows' residual with the prior (nominal) parameters [Nm].
+        nominal_rms: The same rows' residual with the prior parameters [Nm]: the
+            description's inertials with the ``friction`` the fit was given (in
+            ``leadthrough identify``, the friction fitted first), not the description's own
+            friction, which the held-out tables' "nominal" rows use.
         samples: Rows used per joint [–].
         gain_scale: Drive-gain scale g (identified K = g K_nominal) [–].
         gain_std: Its posterior standard deviation [–], the model's parameters free too:
