@@ -278,3 +278,19 @@ def test_info_command_summarises_every_shipped_robot(name, capsys):
         assert main(["info", "--robot", name]) == 0
     printed = capsys.readouterr().out
     assert all(joint in printed for joint in robot.joint_names)
+
+
+def test_friction_given_without_its_coulomb_level_is_kept(tmp_path):
+    """Drive data with c (and σ) but no τ_C: τ_C assumed and named, the file's c and σ kept.
+
+    Before, the assumed friction replaced the whole of it: the file's c and σ were lost,
+    and the warning named an assumed viscous coefficient the file had given.
+    """
+    drive = tmp_path / "drive.toml"
+    drive.write_text("viscous = [0.5, 0.4, 0.3]\nnoise_std = [0.2, 0.2, 0.2]\n")
+    robot, caught = quietly(lt.robots.from_urdf, THREE_JOINT, drive_data=drive)
+    assert [joint.friction.viscous for joint in robot.joints] == [0.5, 0.4, 0.3]
+    assert [joint.friction.noise_std for joint in robot.joints] == [0.2, 0.2, 0.2]
+    assert all(joint.friction.coulomb > 0.0 for joint in robot.joints)
+    message = str(caught[0].message)
+    assert "Coulomb friction" in message and "viscous" not in message

@@ -33,6 +33,7 @@ import dataclasses
 import tomllib
 import warnings
 from collections.abc import Mapping
+from collections.abc import Set as AbstractSet
 from pathlib import Path
 from typing import Any
 
@@ -169,6 +170,7 @@ def complete_drive_data(
             home near a singularity (:data:`SINGULAR_HOME`).
     """
     assumed_by_file: list[str] = []
+    data: dict[str, Any] = {}
     if drive_data is not None:
         data = read_drive_data(drive_data, robot.n_joints)
         robot = _applied(robot, data, drive_data)
@@ -176,7 +178,10 @@ def complete_drive_data(
         missing = missing - _supplied(data)
         if "coulomb" in data and "noise_std" not in data:  # σ = 0: no noise band at all
             missing = missing | {"noise_std"}
-    robot, notes = _assume(robot, missing)
+    given = {key: data[key] for key in _FRICTION_KEYS if key in data}
+    robot, notes = _assume(robot, missing, set(given))
+    if "friction" in missing and given:  # the file's own friction values stand
+        robot = _apply(robot, given)
     notes = [*_limit_notes(robot, assumed_limits or {}), *notes]
     if assumed_by_file:
         notes.append(f"{', '.join(assumed_by_file)} (stated in {Path(str(drive_data)).name})")
@@ -209,8 +214,14 @@ def _apply(robot: RobotDescription, data: dict[str, Any]) -> RobotDescription:
     return dataclasses.replace(robot, joints=tuple(joints), home_position=home)
 
 
-def _assume(robot: RobotDescription, missing: set[str]) -> tuple[RobotDescription, list[str]]:
-    """``robot`` with the ``missing`` quantities assumed, and a note per quantity."""
+def _assume(
+    robot: RobotDescription, missing: set[str], kept: AbstractSet[str] = frozenset()
+) -> tuple[RobotDescription, list[str]]:
+    """``robot`` with the ``missing`` quantities assumed, and a note per quantity.
+
+    ``kept``: friction keys the drive data give (``viscous`` without ``coulomb``): not
+    named as assumed; the caller applies them over the assumed friction.
+    """
     notes = []
     limits = robot.torque_limits
     joints = list(robot.joints)
@@ -227,9 +238,11 @@ def _assume(robot: RobotDescription, missing: set[str]) -> tuple[RobotDescriptio
                      f"({INERTIA_PER_TORQUE_LIMIT:g} s² × torque limit)")  # fmt: skip
     if "friction" in missing:
         joints = [dataclasses.replace(joint, friction=_assumed_friction(joint)) for joint in joints]
-        notes.append(f"Coulomb friction {_values(COULOMB_PER_TORQUE_LIMIT * limits)} Nm "
-                     f"({COULOMB_PER_TORQUE_LIMIT:g} × torque limit), viscous "
-                     f"{_values(VISCOUS_PER_TORQUE_LIMIT * limits)} Nm s/rad")  # fmt: skip
+        note = (f"Coulomb friction {_values(COULOMB_PER_TORQUE_LIMIT * limits)} Nm "
+                f"({COULOMB_PER_TORQUE_LIMIT:g} × torque limit)")  # fmt: skip
+        if "viscous" not in kept:
+            note += f", viscous {_values(VISCOUS_PER_TORQUE_LIMIT * limits)} Nm s/rad"
+        notes.append(note)
     if "noise_std" in missing:
         noise = ASSUMED_NOISE_FRACTION * np.array([joint.friction.coulomb for joint in joints])
         joints = [dataclasses.replace(joint, friction=dataclasses.replace(joint.friction,
