@@ -237,6 +237,12 @@ def test_joint_that_never_moved_is_named(short_logs, yumi):
         identify_friction(short_logs, lt.Dynamics(yumi), joints=[1])
 
 
+def test_no_joints_to_identify_is_refused(short_logs, yumi):
+    """``joints=[]`` is an error: the prior came back as if it had been identified."""
+    with pytest.raises(lt.ParameterError, match=r"joints: is empty"):
+        identify_friction(short_logs, lt.Dynamics(yumi), joints=[])
+
+
 @pytest.mark.parametrize("joints", [[7], [-1], [1.5], [True]], ids=str)
 def test_a_joint_out_of_range_is_refused_naming_the_range(short_logs, yumi, joints):
     """``joints`` are 0-based: 7 of the 7-joint YuMi, −1 or 1.5 name the valid range.

@@ -267,8 +267,12 @@ def _valid_joints(joints: Sequence[Any], n: int) -> tuple[int, ...]:
 
     Raises:
         ParameterError: One is not (7 of a 6-joint arm read "joint 7 never moved", −1
-            "joint 0", 1.5 was truncated to 1).
+            "joint 0", 1.5 was truncated to 1), or there are none (the prior came back as
+            the result).
     """
+    if not joints:  # the prior would come back as a result
+        raise ParameterError("joints", "is empty: give the joints to identify, or None for "
+                             "every joint that slid")  # fmt: skip
     if not all(isinstance(j, int | np.integer) and not isinstance(j, bool) and 0 <= j < n
                for j in joints):  # fmt: skip
         raise ParameterError(
