@@ -225,7 +225,17 @@ def gravity_share(bias: FloatArray, gravity: FloatArray, limit: float) -> FloatA
     a shoulder holding 5 Nm at the pose reads a bias of 0.4 Nm there, but is 0.03 Nm off
     where the shoulder holds 0.3 Nm: kept constant, the difference read as a push that ran a
     released arm on for 0.67 s (dry #59 stiff upwards of ``benchmarks/guiding_quality.py``).
+
+    A bias larger than a gain can make at the pose (``|bias| > limit |G|``) is mostly
+    something else, whose sign says nothing of the gain's: the share fades from ``±limit``
+    there to 0 at twice that (``|bias| ≥ 2 limit |G|``, where what is not a gain must be
+    at least as large as what a gain can be). Before, it stayed at ``±limit`` however large
+    the bias: on an arm whose shoulder held 0.23 Nm at the pose (upright) and whose masses
+    read it 0.13 Nm off, the share took 10 % of the shoulder's G the wrong way, the
+    shoulder was held with 0.83 of its gravity half a radian down, and released arms sank
+    up to 0.96 rad in either mode (a reviewer's six-joint arm, lugre #1 of the benchmark).
     """
     with np.errstate(divide="ignore", invalid="ignore"):
         share = np.where(gravity != 0.0, bias / gravity, 0.0)
-    return np.clip(share, -limit, limit)
+    beyond = np.abs(share) / limit  # how many gains' worth the bias is
+    return np.clip(share, -limit, limit) * np.clip(2.0 - beyond, 0.0, 1.0)
