@@ -63,6 +63,23 @@ def constant_gravity_bias(monkeypatch) -> None:
                         lambda bias, gravity, limit: np.zeros_like(bias))  # fmt: skip
 
 
+def saturating_gravity_share(monkeypatch) -> None:
+    """Every calibration's gravity share stays at ±its limit however large the bias, as before.
+
+    Now it fades to 0 where the bias is twice what a drive gain can make
+    (``calibration.gravity_share``); the released arms of the cases found with the share
+    saturated move less with it.
+    """
+    from leadthrough.control import lead_through
+
+    def saturating(bias, gravity, limit):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            share = np.where(gravity != 0.0, bias / gravity, 0.0)
+        return np.clip(share, -limit, limit)
+
+    monkeypatch.setattr(lead_through, "gravity_share", saturating)
+
+
 def constant_level_error(monkeypatch) -> None:
     """Every calibration leaves a level it read its ``friction_accuracy`` at every pose.
 

@@ -1089,6 +1089,7 @@ def test_a_gravity_error_is_a_relative_error_of_g_up_to_the_models_tolerance():
     np.testing.assert_allclose(constant[[0, 1, 3, 4, 5]], [0.0, 0.0, 0.1, 0.0, 0.0], atol=1e-15)
     upright = gravity_share(np.array([-0.129]), np.array([-0.229]), 0.1)  # 5.6 gains' worth
     assert upright[0] == 0.0
+    np.testing.assert_array_equal(gravity_share(bias, gravity, 0.0), 0.0)  # no gain: no NaN
 
 
 def test_the_scripted_sessions_take_the_arm_once_the_calibration_is_over(yumi):

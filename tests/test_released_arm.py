@@ -27,6 +27,7 @@ from as_found import (
     friction_margin_share,
     observer_readings,
     own_rest_bands,
+    saturating_gravity_share,
     settled_after_moving_joints,
     six_hertz_calibration,
     slow_calibration_motion,
@@ -295,6 +296,7 @@ def test_damping_on_the_operator_weight_lets_the_released_arm_coast(monkeypatch)
     unread_torque_offset(monkeypatch)
     thesis_compensation(monkeypatch)
     diagonal_damping(monkeypatch)
+    saturating_gravity_share(monkeypatch)  # as then: its fade alone stops it after 0.47 s
 
     def factory(robot, mode):
         parameters = lt.LeadThroughParameters(unwind_time=None)
@@ -436,6 +438,7 @@ def test_a_joint_running_ahead_of_its_references_is_braked_not_followed(cls, run
     own_rest_bands(monkeypatch)
     thesis_compensation(monkeypatch)
     told_measurement_delay(monkeypatch)  # dry #20 has two periods of delay
+    saturating_gravity_share(monkeypatch)  # as then (its fade also stops it)
     if runs:  # the resting reference of the time, which followed a joint that runs
         settled_after_moving_joints(monkeypatch)
 

@@ -18,6 +18,7 @@ import leadthrough as lt
 from as_found import (
     observer_readings,
     own_rest_bands,
+    saturating_gravity_share,
     slow_calibration_motion,
     two_second_park,
     unread_torque_offset,
@@ -62,6 +63,7 @@ def test_a_joint_held_by_stiction_does_not_wind_the_admittance_up(monkeypatch):
     unread_torque_offset(monkeypatch)
     own_rest_bands(monkeypatch)
     two_second_park(monkeypatch)
+    saturating_gravity_share(monkeypatch)  # as then
     unwound, wound_up = _vibration_ratios(0.05, None)
     assert unwound <= 0.85 * wound_up
 

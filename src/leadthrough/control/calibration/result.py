@@ -235,6 +235,8 @@ def gravity_share(bias: FloatArray, gravity: FloatArray, limit: float) -> FloatA
     shoulder was held with 0.83 of its gravity half a radian down, and released arms sank
     up to 0.96 rad in either mode (a reviewer's six-joint arm, lugre #1 of the benchmark).
     """
+    if limit <= 0.0:  # no drive gain error allowed: all of the bias stays constant
+        return np.zeros_like(np.asarray(bias, dtype=float))
     with np.errstate(divide="ignore", invalid="ignore"):
         share = np.where(gravity != 0.0, bias / gravity, 0.0)
     beyond = np.abs(share) / limit  # how many gains' worth the bias is
