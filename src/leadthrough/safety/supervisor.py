@@ -253,11 +253,11 @@ class SafetySupervisor:
         arm is: the safe stop holds it there against gravity. Before, it held nothing (zero
         torque): the arm dropped 0.2–0.5 mrad before the next sample.
         """
-        if position is None:
+        if position is None:  # not read (``floats`` gives floats when it is)
             return False
-        q, limits = position, self._limits
-        return bool(q.shape == (self.n,) and np.issubdtype(q.dtype, np.floating)
-                    and np.all(q >= limits.q_low) and np.all(q <= limits.q_high))  # fmt: skip
+        limits = self._limits
+        return bool(position.shape == (self.n,) and np.all(position >= limits.q_low)
+                    and np.all(position <= limits.q_high))  # fmt: skip
 
     def _time_problem(self, t: object) -> str | None:
         """Why the stamp ``t`` cannot be used, or None; keeps the latest stamp.
