@@ -252,6 +252,31 @@ def test_by_default_held_keeps_the_thesis_fraction(yumi, taken_as_calibrated):
     np.testing.assert_allclose(held, thesis, atol=1e-12)
 
 
+def test_the_settings_follow_the_device_each_time_it_changes(yumi, taken_as_calibrated):
+    """The law and the compensation are set when the device changes, not every period.
+
+    Held, released, none, held again, then a reset (new law parts) while held: each
+    period's damping, margin and ε are those of the device read that period.
+    """
+    parameters = lt.LeadThroughParameters(mode="active")
+    parameters = dataclasses.replace(parameters, compensation=dataclasses.replace(
+        parameters.compensation, held_fraction=1.0))  # fmt: skip
+    ctl = lt.LeadThrough(yumi, parameters=parameters)
+    q, qd = yumi.home(), np.zeros(yumi.n_joints)
+    rest_damping, thesis = parameters.rest_damping, parameters.compensation.fraction
+    t = 0.0
+    for readings in ((True, True, False, False, None, True), (True,)):
+        for enabling in readings:
+            ctl.step(lt.JointState(t, q, qd, None, enabling=enabling))
+            t += 0.004
+            assert ctl.law.enabling is enabling
+            held = enabling is True
+            assert ctl.law._admittance_scalars[_REST_DAMPING] == (0.0 if held else rest_damping)
+            assert bool(np.all(ctl.law.margin_error == 0.0)) is held
+            assert ctl.feed_forward.compensation.fraction == (1.0 if held else thesis)
+        ctl.reset()  # new feed-forward: set again, though the device did not change
+
+
 @pytest.mark.parametrize("value", [-0.1, 1.2, np.nan, "all"])
 def test_a_held_fraction_outside_0_1_is_refused(value):
     """A fraction of τ_C: a number in [0, 1], or a one-line error naming the field."""

@@ -187,6 +187,9 @@ class LeadThrough:
         known = dataclasses.replace(friction, relative_error=self.law.friction_error)
         self.observer = MomentumObserver(self.dynamics, known, self.dt, p.observer)
         self.fusion = None if p.tool_force is None else ToolForceFusion(friction, p.tool_force)
+        # the enabling device's state the law and the compensation were last set for
+        # (``_control`` sets them when it changes): none yet on these parts
+        self._enabling_in_use: object = _NOT_SET
 
     # --- state a user may read ---------------------------------------------------------
 
@@ -238,15 +241,15 @@ class LeadThrough:
         error ``(e₊ + e₋) / 2`` carries as the level's ``(e₊ − e₋) / 2`` does.
         ``observer.std`` is the filter's own covariance.
         """
-        friction = np.hypot(self.observer.error_std, self._ripple_std)
         model = self.model
         if model is None:
-            return friction
+            return np.hypot(self.observer.error_std, self._ripple_share * np.abs(self._applied))
         reference = self._gravity_reference
         if reference is None:
             reference = self._no_gravity_reference
-        return _with_gravity_error(friction, model.gravity, reference, self._gravity_std,
-                                   self._gravity_reading_std)  # fmt: skip
+        return _joint_std(self.observer.error_std, self._applied, self._ripple_share,
+                          model.gravity, reference, self._gravity_std,
+                          self._gravity_reading_std)  # fmt: skip
 
     @property
     def tool_wrench(self) -> ToolWrench:
@@ -359,7 +362,7 @@ class LeadThrough:
         self._no_constraint = np.zeros(n)  # the constraint torque without constraints [Nm]
         self._no_dither = np.zeros(n)  # the dither sent while the device is released [Nm]
         self._no_gravity_reference = np.zeros(n)  # G_cal without a calibration [Nm]
-        self._ripple_std = np.zeros(n)  # the drives' ripple on the last motor torque [Nm]
+        self._applied = np.zeros(n)  # the motor torque of the last period [Nm] (its ripple)
         #: which command the measured torque holds, read from the data (starts at the
         #: parameters' ``measurement_delay``)
         self.interface_delay = InterfaceDelay(n, p.measurement_delay, self.dt)
@@ -664,13 +667,14 @@ class LeadThrough:
         """The guiding command [Nm] and the dither it holds [Nm]."""
         q, qd = model.q, model.qd
         enabling = self._law_enabling()
-        self.law.use_enabling(enabling)
-        self.feed_forward.use_fraction(self._compensated_fraction(enabling))
+        if enabling is not self._enabling_in_use:  # the law's and the compensation's settings
+            self.law.use_enabling(enabling)
+            self.feed_forward.use_fraction(self._compensated_fraction(enabling))
+            self._enabling_in_use = enabling
         if self.level_error is not None:
             self._follow_level_error(q)
         applied, dither = self._measured(tau_measured)
-        np.multiply(np.abs(applied, out=self._ripple_std), self._ripple_share,
-                    out=self._ripple_std)  # fmt: skip
+        self._applied[:] = applied  # the drives' ripple on it: joint_std
         self._stage = "observer"
         estimate = self.observer.update(q, qd, applied - dither, model)
         if self.fusion is not None:
@@ -762,13 +766,20 @@ class LeadThrough:
         return self.last_feed_forward
 
 
-@kernel
-def _with_gravity_error(friction, gravity, reference, gravity_std, reading):
-    """``√(friction² + (gravity_std · |G − G_cal|)² + reading²)`` per joint, in place [Nm].
+#: ``LeadThrough._enabling_in_use`` before the law is set for any state of the device.
+_NOT_SET = object()
 
-    ``reading``: how far the calibration's reading of G_cal may be off [Nm] (joint_std).
+
+@kernel
+def _joint_std(friction, applied, ripple, gravity, reference, gravity_std, reading):
+    """:attr:`LeadThrough.joint_std`, in place of ``friction`` [Nm].
+
+    ``√(friction² + (ripple · |τ|)² + (gravity_std · |G − G_cal|)² + reading²)`` per joint:
+    ``friction`` the observer's ``error_std``, ``applied`` the motor torque τ of the last
+    period, ``reading`` how far the calibration's reading of G_cal may be off [Nm].
     """
     for i in range(friction.shape[0]):
+        measured = math.hypot(friction[i], ripple * abs(applied[i]))
         model = math.hypot(gravity_std * abs(gravity[i] - reference[i]), reading[i])
-        friction[i] = math.hypot(friction[i], model)
+        friction[i] = math.hypot(measured, model)
     return friction

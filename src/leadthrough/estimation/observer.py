@@ -498,9 +498,18 @@ class MomentumObserver:
 def _require_finite(*inputs: tuple[str, FloatArray]) -> None:
     """Raise :class:`InputValueError` naming the first (name, array) with a NaN or Inf."""
     for name, value in inputs:
-        if not math.isfinite(value.sum()):  # a NaN or Inf anywhere makes the sum one
+        if not _finite(value):
             bad = np.flatnonzero(~np.isfinite(value)).tolist()
             raise InputValueError(name, f"not finite (NaN or Inf) on joints {bad}")
+
+
+@kernel
+def _finite(values):
+    """Whether every entry of the vector ``values`` is finite (compiled: no NumPy reduction)."""
+    for value in values:  # noqa: SIM110 (a loop numba compiles)
+        if not math.isfinite(value):
+            return False
+    return True
 
 
 @kernel

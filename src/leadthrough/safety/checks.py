@@ -69,7 +69,9 @@ def seconds(t: object) -> float | None:
     return value if math.isfinite(value) else None
 
 
-def time_problem(t: object, previous: float | None, max_gap: float | None) -> str | None:
+def time_problem(
+    t: object, previous: float | None, max_gap: float | None, value: float | None = None
+) -> str | None:
     """Why a sample's time stamp cannot be used, or None.
 
     Args:
@@ -80,8 +82,10 @@ def time_problem(t: object, previous: float | None, max_gap: float | None) -> st
             back by less is taken as it is (a driver's clock may be coarse): compared
             with the latest, a clock that runs backwards slowly is a fault once it is
             ``max_gap`` behind (:func:`clock_stopped` for one that stops).
+        value: ``seconds(t)``, if the caller has it.
     """
-    value = seconds(t)
+    if value is None:
+        value = seconds(t)
     if value is None:
         return f"time stamp {t!r} is not a finite number"
     if previous is None or max_gap is None:

@@ -221,8 +221,7 @@ class SafetySupervisor:
         """
         position: FloatArray | None = None
         try:
-            late = self._time_problem(t)
-            self._clock(t)
+            late = self._time_problem(t)  # and the latest time, if t is a finite number
             position, velocity = floats(q), as_floats(qd)  # q is kept: a copy
             tau = None if tau_measured is None else as_floats(tau_measured)
             limits, count = self._limits, OUT_OF_RANGE
@@ -262,15 +261,17 @@ class SafetySupervisor:
     def _time_problem(self, t: object) -> str | None:
         """Why the stamp ``t`` cannot be used, or None; keeps the latest stamp.
 
+        Takes ``t`` as the latest time (:meth:`_clock`) if it is a finite number.
         :func:`~.checks.time_problem` against the latest stamp,
         :func:`~.checks.clock_stopped`, and :func:`~.checks.sample_rate_problem` once the
         stamps span :data:`~.checks.RATE_WINDOW`.
         """
         gap = self.parameters.max_time_gap
-        problem = time_problem(t, self._t_checked, gap)
         value = seconds(t)
+        problem = time_problem(t, self._t_checked, gap, value)
         if value is None:
             return problem
+        self._t = value
         if self._t_checked is None or value > self._t_checked:
             self._t_checked, self._stalled = value, 0
         else:
