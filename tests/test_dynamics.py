@@ -213,6 +213,11 @@ def test_outputs_are_fresh_arrays(yumi, dyn):
     kept = first.copy()
     dyn.gravity(q1)
     np.testing.assert_array_equal(first, kept)
+    snapshot = dyn.snapshot(q0, np.ones(yumi.n_joints))
+    arrays = {name: value.copy() for name, value in vars(snapshot).items()}
+    dyn.snapshot(q1, -np.ones(yumi.n_joints))
+    for name, value in arrays.items():
+        np.testing.assert_array_equal(getattr(snapshot, name), value, err_msg=name)
 
 
 @pytest.mark.parametrize("method", ["gravity", "mass", "jacobian", "pose"])

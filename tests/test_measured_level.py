@@ -42,8 +42,9 @@ def test_compiled_growth_equals_its_python():
         q, pose = rng.normal(0, 1, 7), rng.normal(0, 1, 7)
         at_pose, far = rng.uniform(0, 0.1, 7), rng.uniform(0.1, 0.4, 7)
         span = rng.uniform(0.0, 1.0, 7) * (rng.uniform(size=7) > 0.3)
-        compiled = _grown(q, pose, at_pose, far, 0.3, span, np.zeros(7))
-        plain = _grown.py_func(q, pose, at_pose, far, 0.3, span, np.zeros(7))
+        compiled, plain = np.zeros(7), np.zeros(7)
+        _grown(q, pose, at_pose, far, 0.3, span, compiled)
+        _grown.py_func(q, pose, at_pose, far, 0.3, span, plain)
         np.testing.assert_array_equal(compiled, plain)
 
 

@@ -288,7 +288,8 @@ class ActiveLaw:
         the other: a rectified drive that crept a released joint 1.2 mrad in 4 s.
         """
         if self.compiled:
-            return sliding_velocity(qd, self.parameters.rest_velocity, self._sliding)
+            sliding_velocity(qd, self.parameters.rest_velocity, self._sliding)
+            return self._sliding
         return dead_zone(qd, self.parameters.rest_velocity)
 
     def operator_torque(
@@ -308,8 +309,8 @@ class ActiveLaw:
         if not self.compiled:
             self._update_drive(estimate, q, self.sliding_velocity(qd), gravity)
             return self.drive
-        qd = sliding_velocity(qd, self.parameters.rest_velocity, self._sliding)
-        self.friction.terms_into(qd, q, self._terms)  # the rows the compiled drive reads
+        sliding_velocity(qd, self.parameters.rest_velocity, self._sliding)
+        self.friction.terms_into(self._sliding, q, self._terms)  # the rows the compiled drive reads
         bias, (level, viscous, upper, lower) = self.model_error, self._term_rows
         operator_drive(estimate, q, gravity, level, viscous, upper, lower,
             self._joint_constants, self._drive_scalars, self.narrowing, bias.bias,

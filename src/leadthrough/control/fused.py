@@ -139,12 +139,15 @@ def operator_drive(estimate, q, gravity, level, viscous, upper, lower, joint, sc
 
 @kernel
 def rest_narrowing(fused_std, own_std, out):
-    """``min(fused_std / max(own_std, 1e-9), 1)`` [–] into ``out`` (``ActiveLaw.narrow``)."""
+    """``min(fused_std / max(own_std, 1e-9), 1)`` [–] into ``out`` (``ActiveLaw.narrow``).
+
+    Returns nothing (an array returned costs numba ~0.2 µs to box), as every kernel of a
+    control period.
+    """
     for i in range(out.shape[0]):
         own = own_std[i] if own_std[i] > 1e-9 or own_std[i] != own_std[i] else 1e-9
         ratio = fused_std[i] / own
         out[i] = ratio if ratio < 1.0 or ratio != ratio else 1.0
-    return out
 
 
 @kernel
@@ -158,7 +161,6 @@ def sliding_velocity(qd, rest_velocity, out):
             out[i] = v + rest_velocity
         else:
             out[i] = 0.0  # at rest (and NaN, as the NumPy dead_zone)
-    return out
 
 
 @kernel

@@ -247,9 +247,10 @@ class LeadThrough:
         reference = self._gravity_reference
         if reference is None:
             reference = self._no_gravity_reference
-        return _joint_std(self.observer.error_std, self._applied, self._ripple_share,
-                          model.gravity, reference, self._gravity_std,
-                          self._gravity_reading_std)  # fmt: skip
+        std = self.observer.error_std  # a copy: written in place
+        _joint_std(std, self._applied, self._ripple_share, model.gravity, reference,
+                   self._gravity_std, self._gravity_reading_std)  # fmt: skip
+        return std
 
     @property
     def tool_wrench(self) -> ToolWrench:
@@ -782,4 +783,3 @@ def _joint_std(friction, applied, ripple, gravity, reference, gravity_std, readi
         measured = math.hypot(friction[i], ripple * abs(applied[i]))
         model = math.hypot(gravity_std * abs(gravity[i] - reference[i]), reading[i])
         friction[i] = math.hypot(measured, model)
-    return friction

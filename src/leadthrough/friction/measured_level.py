@@ -58,8 +58,9 @@ class MeasuredLevelError:
     def at(self, q: FloatArray, out: FloatArray | None = None) -> FloatArray:
         """``e(q) = min(e₀ + s max(|q − q₀| − w, 0), e_far)`` per joint [–] (into ``out``)."""
         out = np.empty_like(self.far) if out is None else out
-        return _grown(np.asarray(q, dtype=float), self.pose, self.at_pose, self.far,
-                      float(self.slope), self.span, out)  # fmt: skip
+        _grown(np.asarray(q, dtype=float), self.pose, self.at_pose, self.far,
+               float(self.slope), self.span, out)  # fmt: skip
+        return out
 
 
 @kernel
@@ -69,4 +70,3 @@ def _grown(q, pose, at_pose, far, slope, span, out):
         beyond = abs(q[i] - pose[i]) - span[i]
         grown = at_pose[i] + slope * (beyond if beyond > 0.0 else 0.0)
         out[i] = grown if grown < far[i] else far[i]
-    return out
