@@ -57,7 +57,7 @@ class Dynamics:
         mass, drift = np.empty((n, n)), np.empty(n)
         _mass_and_drift(upper, pin.computeCoriolisMatrix(model, data, q, qd), qd, mass, drift)
         jacobian = pin.computeFrameJacobian(model, data, q, self._tcp, _WORLD_ALIGNED)
-        pose = pin.updateFramePlacement(model, data, self._tcp).homogeneous  # a new array (owns its data)
+        pose = pin.updateFramePlacement(model, data, self._tcp).homogeneous  # a new array
         return ModelSnapshot(q, qd, gravity, mass, drift, jacobian, pose)
 
     def gravity(self, q: ArrayLike) -> FloatArray:
