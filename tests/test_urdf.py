@@ -1,3 +1,4 @@
+import re
 from collections.abc import Callable
 from pathlib import Path
 
@@ -393,6 +394,68 @@ def test_a_malformed_limit_of_the_shipped_panda_names_its_joint(tmp_path):
                     encoding="utf-8")  # fmt: skip
     error = _error(path, tip="panda_hand")
     assert str(error) == f"""{path}: joint 'panda_joint3': <limit effort="abc"> is not a number"""
+
+
+def _shipped_ur5_in(tmp_path: Path, convert) -> Path:
+    """The shipped UR5 with each joint's ``<limit>`` / ``<origin>`` line passed to ``convert``."""
+    text = (Path(lt.robots.__file__).parent / "data" / "ur5.urdf").read_text(encoding="utf-8")
+    path = tmp_path / "ur5.urdf"
+    path.write_text(convert(text), encoding="utf-8")
+    return path
+
+
+def _in_degrees(text: str) -> str:
+    def degrees(match: re.Match) -> str:
+        return f'{match.group(1)}="{np.degrees(float(match.group(2))):.1f}"'
+
+    return re.sub(r'(lower|upper)="([-0-9.e]+)"', degrees, text)
+
+
+def _in_millimetres(text: str) -> str:
+    def millimetres(match: re.Match) -> str:
+        return 'xyz="' + " ".join(f"{1000.0 * float(v):g}" for v in match.group(1).split()) + '"'
+
+    return re.sub(r'xyz="([^"]+)"', millimetres, text.replace("<axis xyz=", "<axis XYZ=")
+                  ).replace("<axis XYZ=", "<axis xyz=")  # fmt: skip
+
+
+def test_limits_in_degrees_are_refused(tmp_path):
+    """A revolute joint's limits beyond two turns: radians, not degrees.
+
+    Before, the UR5's limits of ±360 "rad" loaded and nothing limited its joints.
+    """
+    error = _error(_shipped_ur5_in(tmp_path, _in_degrees), tip="tool0")
+    assert error.field == "joint 'shoulder_pan_joint'"
+    assert error.reason == ('<limit lower="-360.0"> is more than two turns: a URDF gives '
+                            "radians (was it written in degrees?)")  # fmt: skip
+
+
+def test_offsets_in_millimetres_are_refused(tmp_path):
+    """A moving joint 10 m or more from its parent: metres, not millimetres.
+
+    Before, the UR5 in millimetres loaded, its shoulder holding 30 566 Nm at home.
+    """
+    error = _error(_shipped_ur5_in(tmp_path, _in_millimetres), tip="tool0")
+    assert error.field == "joint 'shoulder_pan_joint'"
+    assert "puts a joint 89.2 m from its parent's frame: a URDF gives metres" in error.reason
+
+
+def test_a_centre_of_mass_in_millimetres_is_refused(tmp_path):
+    """A link's centre of mass 10 m or more from its frame: one line naming the link."""
+    path = tmp_path / "arm.urdf"
+    path.write_text(HINGES.replace('<origin xyz="0 0 0.1"/>\n      ' + LINK2_MASS,
+                                   '<origin xyz="0 0 100"/>\n      ' + LINK2_MASS),
+                    encoding="utf-8")  # fmt: skip
+    error = _error(path)
+    assert error.field == LINK2 and "puts the centre of mass 100 m" in error.reason
+
+
+def test_a_file_s_way_of_saying_no_limit_loads(tmp_path):
+    """Limits of ±1e16 (example-robot-data's rotors) mean none, not degrees: they load."""
+    path = tmp_path / "arm.urdf"
+    path.write_text(HINGES.replace('lower="-1" upper="1"', 'lower="-1e16" upper="1e16"'),
+                    encoding="utf-8")  # fmt: skip
+    assert lt.robots.from_urdf(path).q_max[0] == 1e16
 
 
 @pytest.mark.parametrize(

@@ -33,6 +33,17 @@ _TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 #: loads as a revolute one and whose torque and speed limits it needs.
 _NEEDS_LIMIT = ("revolute", "continuous", "prismatic")
 _INERTIA = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+#: The largest limit of a revolute joint [rad]: two turns either way. A URDF gives angles in
+#: radians; limits written in degrees (±170) are far beyond it.
+_LARGEST_ANGLE = 4.0 * math.pi
+#: Limits beyond this [rad] are not degrees (ten turns of them) but a file's way to say
+#: "none" (±1e16 on example-robot-data's rotors): they load as they are.
+_NO_LIMIT = 3600.0
+#: The farthest a moving joint, or a link's centre of mass, may sit from its parent's
+#: frame [m]. A URDF gives lengths in metres; written in millimetres, an arm's offsets
+#: (90–900 mm) are far beyond it. A fixed joint is not checked: it may place the arm in a
+#: large cell.
+_LONGEST_OFFSET = 10.0
 
 
 def check_urdf(root: ElementTree.Element, source: str) -> None:
@@ -48,7 +59,9 @@ def check_urdf(root: ElementTree.Element, source: str) -> None:
             parent or child link that the file does not define, a ``<limit>`` missing
             on a moving joint or without ``effort`` and ``velocity``, a value that is not
             a finite number or not as many as it needs (``<axis xyz="1 0">``), a
-            negative effort, velocity, damping, friction or mass.
+            negative effort, velocity, damping, friction or mass; a revolute joint's
+            limit beyond two turns (degrees?), a moving joint's origin or a centre of mass
+            more than 10 m from its frame (millimetres?).
     """
     if root.tag == "robot" and root.get("name") is None:
         raise RobotDescriptionError(source, "", "<robot> has no name")
@@ -89,11 +102,41 @@ def _check_joint(joint: ElementTree.Element, links: set[str]) -> None:
     for attribute in ("effort", "velocity", "lower", "upper"):
         required, minimum = (True, 0.0) if attribute in ("effort", "velocity") else (False, None)
         _numbers(limit, attribute, required=required, minimum=minimum)
+    if kind in _NEEDS_LIMIT:
+        _check_units(joint, kind)
     dynamics = joint.find("dynamics")
     if dynamics is not None and not {"damping", "friction"} & set(dynamics.attrib):
         raise fail("", "<dynamics> has neither damping nor friction")
     for attribute in ("damping", "friction"):
         _numbers(dynamics, attribute, minimum=0.0)
+
+
+def _check_units(joint: ElementTree.Element, kind: str | None) -> None:
+    """Raise if a moving joint's limits or origin read as degrees or millimetres.
+
+    Loaded as they were, limits of ±170 "rad" let the arm turn for ever and an origin of
+    136 "m" made the UR5's shoulder hold 30 000 Nm, with no word.
+    """
+    limit = joint.find("limit")
+    if kind == "revolute" and limit is not None:
+        for attribute in ("lower", "upper"):
+            text = limit.get(attribute)
+            if text is not None and _LARGEST_ANGLE < abs(float(text)) <= _NO_LIMIT:
+                raise fail("", f'<limit {attribute}="{text}"> is more than two turns: a URDF '
+                           f"gives radians (was it written in degrees?)")  # fmt: skip
+    _check_offset(joint.find("origin"), "a joint")
+
+
+def _check_offset(origin: ElementTree.Element | None, what: str) -> None:
+    """Raise if ``origin``'s xyz is farther than :data:`_LONGEST_OFFSET` from its frame."""
+    text = None if origin is None else origin.get("xyz")
+    if text is None:
+        return
+    distance = math.hypot(*map(float, text.split()))
+    if distance > _LONGEST_OFFSET:
+        reason = (f'<origin xyz="{text}"> puts {what} {distance:.3g} m from its parent\'s '
+                  "frame: a URDF gives metres (was it written in millimetres?)")  # fmt: skip
+        raise fail("", reason)
 
 
 def _check_tree(joints: list[ElementTree.Element], links: list[str], source: str) -> None:
@@ -140,6 +183,7 @@ def _check_inertial(inertial: ElementTree.Element | None) -> None:
         return
     _numbers(inertial.find("origin"), "xyz", 3)
     _numbers(inertial.find("origin"), "rpy", 3)
+    _check_offset(inertial.find("origin"), "the centre of mass")
     mass, inertia = inertial.find("mass"), inertial.find("inertia")
     for tag, element in (("mass", mass), ("inertia", inertia)):
         if element is None:
