@@ -121,6 +121,39 @@ def test_panda_text_log_reads_samples_on_consecutive_lines(tmp_path):
     assert log.n_joints == 7
 
 
+def _smooth_panda_log(folder, drop=None, add=None, kind="positions"):
+    """A 2 s, 1 kHz Panda text log of joints swinging at their own frequencies.
+
+    ``drop``/``add``: the sample at which one value of ``kind`` goes missing / one is
+    added (the counts stay right, the rows between are shifted by one value).
+    """
+    t = np.arange(2000) * 1e-3
+    frequency = np.linspace(0.3, 1.5, 7)
+    columns = {"time": t, "positions": 0.5 * np.sin(2 * np.pi * np.outer(t, frequency)),
+               "torques": np.ones((t.size, 7))}  # fmt: skip
+    columns["velocity"] = np.pi * frequency * np.cos(2 * np.pi * np.outer(t, frequency))
+    for name, values in columns.items():
+        lines = [repr(float(v)) for v in np.ravel(values)]
+        if name == kind and drop is not None:
+            del lines[7 * drop]
+            lines.insert(7 * add, "0.25")
+        (folder / f"exciting_traj_{name}.txt").write_text("\n".join(lines))
+    return folder / "exciting_traj_time.txt"
+
+
+@pytest.mark.parametrize("kind", ["positions", "velocity"])
+def test_a_value_missing_and_one_added_in_a_panda_log_is_named(tmp_path, kind):
+    """The counts match, so the rows between were read shifted, each joint its neighbour's.
+
+    Before, such a log loaded whole with 900 rows misread and no word.
+    """
+    assert lt.read_log(_smooth_panda_log(tmp_path)).n_samples == 2000  # sound: read whole
+    with pytest.raises(LogError, match=r"from about row (29|30)\d to row 1[12]\d\d each joint's "
+                       r"position reads its neighbour's velocity: a value is missing and one "
+                       r"added in \*_positions.txt or \*_velocity.txt"):  # fmt: skip
+        lt.read_log(_smooth_panda_log(tmp_path, drop=300, add=1200, kind=kind))
+
+
 def test_excitation_logs_read_as_one_log(tmp_path):
     """The project's excitation logs (npz) are read back unchanged."""
     from leadthrough.friction.logs import save_logs

@@ -22,7 +22,9 @@ rows of UR logs), a joint reading off the run's own path by more than 0.2 rad (a
 zeros in a moving log), or a time out of line with the rows around it (the fewest rows
 are dropped for time to increase: a time stamp that jumped costs its own row, not the
 rows after it). One warning counts the dropped rows and names the first ones; a file
-with more than half its rows dropped is an error naming the file.
+with more than half its rows dropped is an error naming the file. A Panda text log whose
+positions and velocities are one value apart over a stretch of rows (a value missing from
+one file and one added further on) is an error naming the rows (:func:`_shifted_rows`).
 """
 
 from __future__ import annotations
@@ -233,6 +235,11 @@ def _read_panda_txt(path: Path) -> JointLog:
                                                                   "torques")):  # fmt: skip
         raise LogError(f"{folder}: {t.size} times do not match {columns['positions'].size} "
                        "positions, velocities or torques")  # fmt: skip
+    shifted = _shifted_rows(t, columns["positions"], columns["velocity"], n)
+    if shifted is not None:
+        raise LogError(f"{folder}: from about row {shifted[0]} to row {shifted[1]} each joint's "
+                       "position reads its neighbour's velocity: a value is missing and one "
+                       "added in *_positions.txt or *_velocity.txt")  # fmt: skip
     q, qd, tau = (columns[kind].reshape(t.size, n) for kind in ("positions", "velocity", "torques"))
     table = np.column_stack([t, q, qd, tau])
     kinds = ["time"] + ["q"] * n + ["qd"] * n + ["torque"] * n
@@ -242,6 +249,49 @@ def _read_panda_txt(path: Path) -> JointLog:
     return JointLog(table[:, 0], table[:, 1:1 + n], table[:, 1 + n:1 + 2 * n],
                     table[:, 1 + 2 * n:], source=str(folder),
                     dropped_rows=int(t.size - keep.sum()))  # fmt: skip
+
+
+#: Samples over which positions are compared with the velocities' integral (_shifted_rows).
+_ALIGNMENT_WINDOW = 20
+#: Smallest disagreement read as evidence [rad]: below it, a joint at rest or quantisation.
+_ALIGNMENT_FLOOR = 1e-3
+
+
+def _shifted_rows(
+    t: FloatArray, positions: FloatArray, velocities: FloatArray, n: int
+) -> tuple[int, int] | None:
+    """The first and last rows (1-based) whose positions sit one value off the velocities.
+
+    One value per line, a value missing from one file and one added further on keep the
+    counts right and shift every joint of the rows between onto its neighbour's. Over
+    each window of :data:`_ALIGNMENT_WINDOW` samples the change of each position is
+    compared with the integral of its velocity; a window is shifted where the positions
+    moved one value either way agree at least four times better and the disagreement is
+    above :data:`_ALIGNMENT_FLOOR`. None: no more shifted windows than one window's worth
+    (a real Panda log: none of its 20 544). A shift in the torques is not seen.
+    """
+    rows, window = t.size, _ALIGNMENT_WINDOW
+    if rows <= window:
+        return None
+    velocity = velocities.reshape(rows, n)
+    steps = 0.5 * (velocity[1:] + velocity[:-1]) * np.median(np.diff(t))
+    integral = np.vstack([np.zeros((1, n)), np.cumsum(steps, axis=0)])
+    travel = integral[window:] - integral[:-window]
+
+    def disagreement(flat: FloatArray) -> FloatArray:
+        q = flat.reshape(rows, n)
+        with np.errstate(invalid="ignore"):
+            return np.max(np.abs(q[window:] - q[:-window] - travel), axis=1)
+
+    none = np.array([np.nan])
+    as_read = disagreement(positions)
+    moved = np.fmin(disagreement(np.concatenate([positions[1:], none])),
+                    disagreement(np.concatenate([none, positions[:-1]])))  # fmt: skip
+    with np.errstate(invalid="ignore"):
+        shifted = np.flatnonzero((moved < 0.25 * as_read) & (as_read > _ALIGNMENT_FLOOR))
+    if shifted.size <= window:
+        return None
+    return int(shifted[0]) + 1, int(shifted[-1]) + window + 1
 
 
 def _one_per_line(path: Path) -> FloatArray:
