@@ -252,12 +252,18 @@ def test_a_cut_or_unfinished_recording_reads_with_a_warning_saying_how_much(tmp_
 
 @pytest.mark.parametrize(
     ("divided", "says"),
-    [(60.0, "60× too fast"), (1000.0, "1000× too fast"), (0.2, "5× too slow")],
+    [
+        (60.0, "60× too fast"),
+        (1000.0, "1000× too fast"),
+        (0.2, "5× too slow"),
+        (0.5, "2× too slow"),
+    ],
 )
 def test_a_log_whose_clock_runs_too_fast_for_its_velocities_is_refused(tmp_path, divided, says):
     """Time divided by 60 or 1000 (``inspect`` read "6000 Hz"): dq/dt is 60× q̇, one line.
 
-    Stretched 5× (``inspect`` found two contacts in a log of free motion), it is a fifth.
+    Stretched 5× (``inspect`` found two contacts in a log of free motion), it is a fifth;
+    stretched 2×, half (it was within the 3× allowed before).
     """
     table = _ur_rows(200, 31)
     assert lt.read_log(_write(tmp_path / "s.csv", table)).n_samples == 200  # in seconds: read
@@ -272,7 +278,7 @@ def test_a_log_whose_clock_runs_too_fast_for_its_velocities_is_refused(tmp_path,
 
 @needs_realdata
 def test_every_real_log_has_its_velocities_within_3_percent_of_dq_dt():
-    """q̇ / (dq/dt) where the joints move is 0.977–1.001 on the real logs: far inside 3×."""
+    """q̇ / (dq/dt) where the joints move is 0.977–1.001 on the real logs: far inside 1.5×."""
     paths = [*sorted((REALDATA / "ur10e").glob("*/*.csv")), REALDATA / "panda_gaz2019"]
     ratios = {}
     for path in paths:

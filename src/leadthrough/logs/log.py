@@ -19,9 +19,10 @@ FloatArray = NDArray[np.float64]
 #: and Panda logs sample at 100 Hz and 1 kHz): a log timed in milliseconds reads 4–10 s.
 MAX_PERIOD = 0.1
 #: dq/dt over the time column exceeds the logged q̇ (median, where the joints move) by at
-#: most this factor [–]; on the public UR10e and Panda logs by at most 2.3 % (a time column
-#: divided by 60 or 1000: 60 or 1000).
-RATE_TOLERANCE = 3.0
+#: most this factor [–], either way; on the public UR10e and Panda logs by at most 2.3 % (a
+#: time column divided by 60 or 1000: 60 or 1000; a log stretched 2×: half). As the
+#: supervisor's ``rate_tolerance`` for live samples.
+RATE_TOLERANCE = 1.5
 #: Fewest samples (of all joints) logged faster than ``MOVING_SPEED`` for that comparison.
 MIN_MOVING = 10
 #: A joint moves, for that comparison, where its logged |q̇| exceeds this [rad/s].
