@@ -732,6 +732,21 @@ def test_the_balance_kept_one_sample_late_is_the_whole_runs(yumi):
     np.testing.assert_allclose(unexplained, momentum - explained, rtol=0, atol=1e-12)
 
 
+def test_a_sample_delivered_twice_adds_nothing_to_the_balance(yumi):
+    """A repeated sample (a driver's, or 500 Hz data in a 1 kHz loop) is left out.
+
+    Before, its zero interval stopped a Panda's calibration at 1 kHz with a fault naming a
+    ZeroDivisionError; now the balance is what it is without the repeats.
+    """
+    speeds = np.linspace(0.05, 0.15, yumi.n_joints)
+    dynamics, friction, t, q, tau = _calibration_motion(yumi, speeds, lambda qd: 0.0 * qd)
+    repeated = np.repeat(np.arange(len(t)), np.where(np.arange(len(t)) % 7 == 3, 2, 1))
+    sound = _kept_sample_by_sample(dynamics, friction, t, q, tau)
+    twice = _kept_sample_by_sample(dynamics, friction, t[repeated], q[repeated], tau[repeated])
+    for kept, expected in zip(twice, sound, strict=True):
+        np.testing.assert_array_equal(kept, expected)
+
+
 def test_the_error_stated_at_the_pose_bounds_how_far_a_level_read_is_off(yumi):
     """Every level read is within the error the controller states for it at the pose.
 

@@ -88,6 +88,19 @@ def test_missed_deadlines_are_counted_and_logged():
     assert any(event.kind == "overrun" for event in slow.supervisor.events)
 
 
+def test_work_after_the_command_counts_in_the_cycle():
+    """A recorder's 6 ms after the command delays the next sample: an overrun, counted.
+
+    Before, only the step was timed: ``teach``'s flush and fsync at 1 kHz (1–6 ms every
+    0.1 s on a Panda) missed deadlines that nothing counted.
+    """
+    ctl = controller()
+    report = lt.control_loop(ClosableTwin(ROBOT), ctl, duration=0.08,
+                             after_period=lambda s, c: time.sleep(0.006))  # fmt: skip
+    assert report.overruns == ctl.supervisor.overruns >= 10
+    assert report.compute_max < 0.004  # the step itself is quick
+
+
 def test_ctrl_c_brings_the_moving_arm_to_the_safe_stop_and_closes_the_robot():
     """Ctrl-C while a hand drags the arm: fault with the reason, the arm stopped and held."""
     twin, ctl = ClosableTwin(ROBOT, operator=pulling_hand(stop=0.4)), controller()

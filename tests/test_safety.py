@@ -491,6 +491,8 @@ def test_record_cycle_counts_overruns(sup):
         sup.record_cycle(k * DT, duration)
     assert sup.overruns == 4
     assert len(kinds(sup, "overrun")) == 2
+    sup.record_cycle(8 * DT, 5.2 * DT)  # five ticks pass before its command: five missed
+    assert sup.overruns == 9 and len(kinds(sup, "overrun")) == 3
 
 
 def test_events_are_logged_once_per_episode(sup, dyn):

@@ -55,8 +55,13 @@ class MomentumBalance:
     def add(self, t: float, q: FloatArray, tau: FloatArray) -> None:
         """One sample: time [s], joint positions [rad], torque applied over the period [Nm].
 
-        Settles the sample before it, whose central difference is now known.
+        Settles the sample before it, whose central difference is now known. A sample
+        that does not come after the last one (a driver that delivers a sample twice, or
+        a 1 kHz loop fed 500 Hz data) is left out: no time passed to balance over (its zero
+        interval stopped a YuMi's calibration with a ZeroDivisionError).
         """
+        if self._t and not float(t) > self._t[-1]:
+            return
         self._t.append(float(t))
         self._q.append(np.array(q, dtype=float))
         self._tau.append(np.array(tau, dtype=float))

@@ -169,14 +169,17 @@ def control_loop(
             command = step(state)
             elapsed = time.perf_counter() - start
             robot.send_torque(command)
-            if wall_clock and supervisor is not None:
-                supervisor.record_cycle(state.t, elapsed)
             compute.append(elapsed)
             k += 1
+            start = time.perf_counter()
             if controller_after is not None:
                 controller_after(state, command)
             if after_period is not None:
                 after_period(state, command)
+            # the work of the cycle, the sending aside (a driver may block in it until the
+            # next tick): a recorder's flush after the command delays the next sample
+            if wall_clock and supervisor is not None:
+                supervisor.record_cycle(state.t, elapsed + time.perf_counter() - start)
             state = robot.read_state()
     except BaseException as error:  # Ctrl-C included: the safe stop comes first
         ended = _interruption(error)
