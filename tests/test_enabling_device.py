@@ -70,10 +70,29 @@ def test_a_malformed_reading_stops_the_arm(yumi, reading):
 
 @pytest.mark.parametrize("reading", [True, np.True_, 1, False, np.False_, 0])
 def test_a_digital_input_reads_as_held_or_released(yumi, reading):
-    """A bool, a NumPy bool or 0 / 1, as a driver's digital input gives it."""
+    """A bool, a NumPy bool or 0 / 1, as a driver's digital input gives it (held: confirmed)."""
     ctl = lt.LeadThrough(yumi, mode="active")
-    ctl.step(lt.JointState(0.0, yumi.home(), np.zeros(yumi.n_joints), None, enabling=reading))
+    for t in (0.0, 0.004):  # held is taken from its second reading on (one period at 250 Hz)
+        ctl.step(lt.JointState(t, yumi.home(), np.zeros(yumi.n_joints), None, enabling=reading))
     assert ctl.state == "teaching" and ctl.enabling is bool(reading)
+
+
+@pytest.mark.parametrize(("dt", "periods"), [(0.004, 1), (0.001, 5)])
+def test_held_is_taken_once_confirmed_released_at_once(yumi, dt, periods):
+    """Held counts after ENABLING_CONFIRMATION (5 ms: 1 period at 250 Hz, 5 at 1 kHz).
+
+    A reading that flips every period (a loose contact) thus leaves the arm released: it
+    switched the assist on and off each period, up to 4 Nm of torque chatter at 500 Hz on a
+    Panda at 1 kHz. A release is taken the period it is read.
+    """
+    ctl = lt.LeadThrough(yumi, mode="active", dt=dt)
+    q, qd = yumi.home(), np.zeros(yumi.n_joints)
+    taken = []
+    readings = [True] * (periods + 1) + [False] + [True, False] * 10
+    for k, reading in enumerate(readings):
+        ctl.step(lt.JointState(k * dt, q, qd, None, enabling=reading))
+        taken.append(ctl.enabling)
+    assert taken == [False] * periods + [True, False] + [False] * 20
 
 
 @pytest.mark.parametrize("compiled", [True, False])
@@ -193,9 +212,10 @@ def test_held_without_a_calibration_the_law_keeps_its_margin(yumi):
     """Unmeasured, the levels may be off by far more than stated: held counts as no device."""
     ctl = lt.LeadThrough(yumi, mode="active")  # no start-up calibration
     q, qd = yumi.home(), np.zeros(yumi.n_joints)
-    ctl.step(lt.JointState(0.0, q, qd, None, enabling=True))
+    for t in (0.0, 0.004):  # held, confirmed at its second reading
+        ctl.step(lt.JointState(t, q, qd, None, enabling=True))
     assert ctl.law.enabling is None and np.all(ctl.law.margin_error > 0.0)
-    ctl.step(lt.JointState(0.004, q, qd, None, enabling=False))
+    ctl.step(lt.JointState(0.008, q, qd, None, enabling=False))
     assert ctl.law.enabling is False  # released counts, calibrated or not
 
 
@@ -265,10 +285,12 @@ def test_the_settings_follow_the_device_each_time_it_changes(yumi, taken_as_cali
     q, qd = yumi.home(), np.zeros(yumi.n_joints)
     rest_damping, thesis = parameters.rest_damping, parameters.compensation.fraction
     t = 0.0
-    for readings in ((True, True, False, False, None, True), (True,)):
-        for enabling in readings:
-            ctl.step(lt.JointState(t, q, qd, None, enabling=enabling))
+    for readings in ((True, True, False, False, None, True, True), (True, True)):
+        for k, reading in enumerate(readings):
+            ctl.step(lt.JointState(t, q, qd, None, enabling=reading))
             t += 0.004
+            # held is taken from its second reading in a row on (one period at 250 Hz)
+            enabling = False if reading and (k == 0 or not readings[k - 1]) else reading
             assert ctl.law.enabling is enabling
             held = enabling is True
             assert ctl.law._admittance_scalars[_REST_DAMPING] == (0.0 if held else rest_damping)

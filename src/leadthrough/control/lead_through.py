@@ -372,6 +372,7 @@ class LeadThrough:
         self._own_clock = 0.0  # [s], for the positional form of step, which brings no time
         self._t = float("nan")
         self._enabling: bool | None = None  # the sample's enabling device (JointState)
+        self._held_since: float | None = None  # when the device last began to read held [s]
         self._stage = "sample"
         self.model: ModelSnapshot | None = None  # the model at the latest sample
         self.last_feed_forward: FeedForwardTorques | None = None
@@ -536,11 +537,27 @@ class LeadThrough:
         if stamp is not None:
             self._t = stamp
         try:
-            self._enabling = enabling_state(sample.enabling)
+            self._enabling = self._confirmed(enabling_state(sample.enabling))
         except ValueError as error:  # a reading nobody can trust: the safe stop
             self._enabling = False
             self.supervisor.stop(str(error), self._t)
         return sample.t, sample.q, sample.qd, sample.tau_measured
+
+    def _confirmed(self, reading: bool | None) -> bool | None:
+        """The enabling device as the controller takes it: released at once, held once sure.
+
+        Released (False) or no device (None) is taken the period it is read, the safe way;
+        held (True) once it has read held for :data:`ENABLING_CONFIRMATION`, released until
+        then. A device whose reading flips every period (a loose contact) thus leaves the
+        arm released, where it switched the assist on and off each period: up to 4 Nm of
+        torque chatter at 500 Hz on a Panda at 1 kHz.
+        """
+        if reading is not True:
+            self._held_since = None
+            return reading
+        if self._held_since is None or not self._t >= self._held_since:
+            self._held_since = self._t
+        return self._t - self._held_since >= ENABLING_CONFIRMATION - 0.5 * self.dt
 
     def _send(self, command: FloatArray, dither: FloatArray) -> FloatArray:
         self._sent.push((command, dither))
@@ -769,6 +786,11 @@ class LeadThrough:
 
 #: ``LeadThrough._enabling_in_use`` before the law is set for any state of the device.
 _NOT_SET = object()
+#: How long the enabling device must read held before it is taken as held [s] (a switch's
+#: bounce lasts a few ms): the next period at 250 Hz, 5 ms at 1 kHz. A release is taken at
+#: once (``LeadThrough._confirmed``). 20 ms made dry #3's relaxed sideways line with a
+#: device 4 % heavier, one period changed nothing.
+ENABLING_CONFIRMATION = 0.005
 
 
 @kernel
