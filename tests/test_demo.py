@@ -47,6 +47,10 @@ def test_teach_then_replay_from_the_command_line(tmp_path, capsys):
     joint = float(re.search(r"joint RMS ([\d.]+) mrad", out).group(1))
     assert joint <= 2.0
     assert (tmp_path / "replay" / "replay.png").exists()
+    # what the supervisor did and the torque used: a braked replay does not pass silently
+    used = float(re.search(r"safety: no event, largest torque (\d+)% of joint \d's limit",
+                           out).group(1))  # fmt: skip
+    assert 0 < used < 85
 
 
 def test_replay_of_a_missing_file_is_a_one_line_error(tmp_path, capsys):

@@ -2,6 +2,7 @@
 
 import os
 import signal
+import struct
 import subprocess
 import sys
 import threading
@@ -236,6 +237,61 @@ def test_truncated_file_recovers_a_prefix(session, tmp_path):
     np.testing.assert_array_equal(recovered.tau_ext_hat, data["tau_ext_hat"][:n])
     assert recovered.mode == data["mode"][:n]
     assert recovered.parameters == data["parameters"]
+
+
+def _first_chunk_fields(content: bytes) -> dict[str, int]:
+    """Byte offsets of the first chunk's length fields (MCAP: opcode u8, length u64, …)."""
+    offset = 8  # the magic
+    while content[offset] != 0x06:  # a Chunk record
+        offset += 9 + struct.unpack_from("<Q", content, offset + 1)[0]
+    body = offset + 9  # start time u64, end time u64, uncompressed size u64, crc u32
+    name_length = body + 28
+    records_length = name_length + 4 + struct.unpack_from("<I", content, name_length)[0]
+    return {
+        "record length": offset + 1,
+        "uncompressed size": body + 16,
+        "compression name length": name_length,
+        "records length": records_length,
+    }
+
+
+@pytest.mark.parametrize(
+    "field", ["record length", "uncompressed size", "compression name length", "records length"]
+)
+def test_a_flipped_length_recovers_what_comes_before(session, tmp_path, field):
+    """One bit flipped high in a chunk's length field: what reads is a prefix, no traceback.
+
+    Before, a huge declared length came out of ``replay`` and ``inspect`` as a MemoryError
+    (the records' length here) or an OverflowError traceback (31 of 496 single-bit flips of
+    one chunk's header, a review). A flipped uncompressed size harms nothing: the data's
+    CRC still holds.
+    """
+    path, data = session
+    content = bytearray(path.read_bytes())
+    at = _first_chunk_fields(bytes(content))[field]
+    content[at + (3 if field == "compression name length" else 6)] ^= 0x80
+    damaged = tmp_path / "damaged.mcap"
+    damaged.write_bytes(bytes(content))
+    recovered = read_recording(damaged)
+    n = recovered.t.size
+    np.testing.assert_array_equal(recovered.q, data["q"][:n])
+    assert recovered.complete is (n == data["t"].size)
+    assert recovered.complete is (field == "uncompressed size")
+
+
+def test_a_flipped_bit_in_the_robot_is_refused(session, tmp_path):
+    """The session metadata carry their checksum: a robot changed by one bit is refused.
+
+    MCAP's chunk CRCs guard the samples only: a UR10e's upper arm read 16.93 kg instead of
+    12.93 from a recording read as complete, and replay and inspect ran on it.
+    """
+    path, _ = session
+    content = path.read_bytes()
+    at = content.index(b"mass = ") + len(b"mass = ")
+    damaged = tmp_path / "robot.mcap"
+    damaged.write_bytes(content[:at] + bytes([content[at] ^ 0x04]) + content[at + 1 :])
+    with pytest.raises(RecordingError, match=r"session metadata .* do not match their checksum"):
+        read_recording(damaged)
 
 
 @pytest.mark.parametrize(

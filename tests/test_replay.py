@@ -164,6 +164,33 @@ def test_the_suggested_time_scale_passes_and_is_close_to_the_least(dyn, case):
         plan_replay(t, q, dyn, parameters=ReplayParameters(**base, time_scale=scale / 1.1))
 
 
+def test_the_plan_leaves_the_tracking_a_share_of_the_limits(dyn):
+    """Planned within ``limit_share`` (0.85) of the speed limit, not up to the limit itself.
+
+    At the limit the tracking's overshoot ran a UR5's joint 4 12 % over its speed limit,
+    braked by the supervisor (a review). The least time scale that passes with the whole
+    limit (``limit_share = 1``) is refused with the default share and passes 1/0.85 slower.
+    """
+    t, q, parameters, _ = refusals()["too fast"]
+    with pytest.raises(ReplayError, match=r"beyond 85% of its limit .* \(the tracking needs"):
+        plan_replay(t, q, dyn, parameters=parameters)
+    full = ReplayParameters(time_scale=parameters.time_scale, limit_share=1.0)
+    with pytest.raises(ReplayError) as caught:
+        plan_replay(t, q, dyn, parameters=full)
+    at_the_limit = caught.value.suggested_time_scale
+    plan = plan_replay(t, q, dyn, parameters=ReplayParameters(time_scale=at_the_limit / 0.85))
+    assert np.max(np.abs(plan.qd) / ROBOT.velocity_limits) <= 0.85
+    with pytest.raises(ReplayError):
+        plan_replay(t, q, dyn, parameters=ReplayParameters(time_scale=at_the_limit))
+
+
+@pytest.mark.parametrize("share", [0.0, -0.5, 1.2, np.nan])
+def test_a_limit_share_outside_0_1_is_refused(share):
+    """A share of the limits: in (0, 1], or a one-line error naming it."""
+    with pytest.raises(lt.ParameterError, match="limit_share"):
+        ReplayParameters(limit_share=share)
+
+
 def test_a_repeated_stamp_keeps_its_first_sample(dyn):
     """A coarse clock repeats stamps (the supervisor takes them while teaching): planned.
 
@@ -453,3 +480,25 @@ def test_at_125_hz_the_replay_tracks_with_the_bandwidth_its_delay_allows(monkeyp
     assert not replayed.faulted and replayed.joint_rms < 10e-3 and replayed.tool_rms < 2e-3
     monkeypatch.setattr(replay, "period_bandwidth", lambda ceiling, dt, gains: ceiling)
     assert replay_quality.replay_on_plant(ROBOT, 2, "lugre", dt=0.008).faulted
+
+
+def test_the_replay_summary_says_what_the_supervisor_did(dyn):
+    """Its events and the largest torque used go into the replay's line, not only the errors.
+
+    Before, a replay the supervisor braked printed "joint RMS 4.07 mrad" alone.
+    """
+    from types import SimpleNamespace
+
+    from leadthrough.experiments.teach import _safety
+
+    t, q = taught_path()
+    replayer = Replayer(plan_replay(t, q, dyn), dyn, None, DT)
+    command = np.zeros((3, ROBOT.n_joints))
+    command[1, 3] = 0.5 * ROBOT.torque_limits[3]
+    sim = SimpleNamespace(tau_command=command)
+    assert _safety(replayer, sim, ROBOT) == "safety: no event, largest torque 50% of joint 4's limit"
+    replayer.supervisor.log("joint_speed", "joint 4 speed 3.2 rad/s above 3.1 rad/s: braking")
+    assert _safety(replayer, sim, ROBOT) == (
+        "safety: 1 event (joint_speed; first: joint 4 speed 3.2 rad/s above 3.1 rad/s: "
+        "braking), largest torque 50% of joint 4's limit"
+    )

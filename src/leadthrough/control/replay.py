@@ -58,6 +58,10 @@ class ReplayParameters:
             is a fault with the safe stop (something holds the arm: a person, an obstacle).
         margin: The path must stay this far inside the position limits [rad] (the
             supervisor's soft walls start ``soft_limit_margin`` inside them).
+        limit_share: The planned speeds and torques stay within this share of the joints'
+            limits [–]: the tracking's own overshoot and its PD's torque take the rest. At
+            the limits themselves a UR5's joint 4 ran 12 % over its speed limit and the
+            supervisor braked it (a review).
         bandwidth: Bandwidth of the tracking PD at 250 Hz and faster [Hz] (see
             :class:`JointTracker`); at a slower rate, what the loop's delay allows
             (:func:`~leadthrough.control.tracking.period_bandwidth`: 2.8 Hz at 125 Hz).
@@ -75,12 +79,17 @@ class ReplayParameters:
     approach_speed: float = 0.2
     max_tracking_error: float = 0.1
     margin: float = 0.02
+    limit_share: float = 0.85
     bandwidth: float = 4.0
     integral_time: float = 0.1
 
     def __post_init__(self) -> None:
         for name in ("smoothing_time", "approach_time", "margin", "integral_time"):
             real(name, getattr(self, name), minimum=0.0, error=ParameterError)
+        share = real("limit_share", self.limit_share, minimum=0.0, strict=True,
+                     error=ParameterError)  # fmt: skip
+        if share > 1.0:
+            raise ParameterError("limit_share", f"must be at most 1 (the limits), got {share:g}")
         for name in (
             "time_scale",
             "pause_speed",
@@ -276,10 +285,12 @@ def _check_limits(plan: ReplayPlan, robot: RobotDescription, friction: FrictionM
                   dynamic: FloatArray, gravity: FloatArray) -> None:  # fmt: skip
     """Raise ReplayError naming the first violation: of position, then speed, then torque.
 
-    For speed and torque it suggests the smallest time_scale, on a 5 % grid up to 20×
-    the plan's, that passes both (slowed by s: q̇ → q̇/s, ``M q̈ + C q̇`` → ``/s²``).
+    Speed and torque are checked against ``limit_share`` of the limits; for them it
+    suggests the smallest time_scale, on a 5 % grid up to 20× the plan's, that passes both
+    (slowed by s: q̇ → q̇/s, ``M q̈ + C q̇`` → ``/s²``).
     """
-    margin, speed, torque = plan.parameters.margin, robot.velocity_limits, robot.torque_limits
+    margin, share = plan.parameters.margin, plan.parameters.limit_share
+    speed, torque = share * robot.velocity_limits, share * robot.torque_limits
     checks = (("position", plan.q, robot.q_min + margin, robot.q_max - margin, "rad"),
               ("speed", plan.qd, -speed, speed, "rad/s"),
               ("torque", plan.tau_required, -torque, torque, "Nm"))  # fmt: skip
@@ -289,10 +300,12 @@ def _check_limits(plan: ReplayPlan, robot: RobotDescription, friction: FrictionM
             continue
         k, j = np.argwhere(beyond)[0]  # the earliest sample, its lowest joint
         limit = low[j] if values[k, j] < low[j] else high[j]
-        reason = (f"joint {j + 1} {kind} {values[k, j]:.4g} {unit} at t = {plan.t[k]:.3f} s "
-                  f"is beyond its limit {limit:.4g} {unit}")  # fmt: skip
+        where = f"joint {j + 1} {kind} {values[k, j]:.4g} {unit} at t = {plan.t[k]:.3f} s is"
         if kind == "position":
-            raise ReplayError(f"{reason} ({margin:g} rad inside the joint range)", int(j) + 1)
+            raise ReplayError(f"{where} beyond its limit {limit:.4g} {unit} ({margin:g} rad "
+                              "inside the joint range)", int(j) + 1)  # fmt: skip
+        reason = (f"{where} beyond {share:.0%} of its limit {abs(limit) / share:.4g} {unit} (the "
+                  "tracking needs the rest)")  # fmt: skip
         needed = None
         for slower in 1.05 ** np.arange(1, 63):
             tau = gravity + dynamic / slower**2 + friction.mean(plan.qd / slower, plan.q)

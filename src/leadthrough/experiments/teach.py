@@ -109,17 +109,20 @@ def teach_on_twin(
     out.parent.mkdir(parents=True, exist_ok=True)
     with SessionRecorder(out, robot, {"mode": mode, "path": path, "dt": twin.dt}) as recorder:
         recording = RecordingController(controller, recorder)
-        try:
-            with _stop_on_ctrl_c(recording):
+        # the file's close too: a second Ctrl-C while it closed left a .part behind
+        with _stop_on_ctrl_c(recording):
+            try:
                 sim = simulate(twin, recording, grab + (duration or chosen.duration))
-        except KeyboardInterrupt:
-            recording.interrupted = True
-        if recording.interrupted:  # the control loop may also end normally on Ctrl-C
-            recorder.event(recording.time, "interrupted", "Ctrl-C: the session was ended")
-    if recording.interrupted:
-        raise KeyboardInterrupt(_interrupted(out, recording.recorded, controller.dt))
+            except KeyboardInterrupt:
+                recording.interrupted = True
+            if recording.interrupted:  # the control loop may also end normally on Ctrl-C
+                recorder.event(recording.time, "interrupted", "Ctrl-C: the session was ended")
+            recorder.close()
     if recording.recorded == 0:  # an empty file would only block the next --out
         out.unlink(missing_ok=True)
+    if recording.interrupted:
+        raise KeyboardInterrupt(_interrupted(out, recording.recorded, controller.dt))
+    if recording.recorded == 0:
         events = controller.supervisor.events
         why = events[-1].detail if events else "the session ended before the calibration did"
         raise RecordingError(str(out), f"nothing was taught or recorded ({why}); no file "
@@ -159,7 +162,7 @@ def _stop_on_ctrl_c(recording: RecordingController) -> Iterator[None]:
 
 def _interrupted(out: Path, recorded: int, dt: float) -> str:
     if recorded == 0:
-        return f"during the start-up calibration: nothing was taught ({out} holds no samples)"
+        return f"during the start-up calibration: nothing was taught, no file written ({out})"
     return f"the {recorded * dt:.1f} s taught so far are recorded, complete, in {out}"
 
 
@@ -217,13 +220,33 @@ def replay_on_twin(
                              "to replay")  # fmt: skip
     _at_most("replay", time_scale * float(t[-1] - t[0]), MAX_SECONDS)
     config = replace(REALISTIC_TWIN, seed=seed + 1)
-    sim, errors, _ = replay_recording(recording.robot, t, q, None, config, time_scale)
+    sim, errors, replayer = replay_recording(recording.robot, t, q, None, config, time_scale)
     out.mkdir(parents=True, exist_ok=True)
     _figure(recording.robot, recording.q, sim, out / "replay.png")
     partial = ("" if recording.complete else f" ({recording.recovery})") + cut
     joint, tool = 1000 * errors["joint_rms"], 1000 * errors["tool_rms"]
     return (f"replayed {recording_path}{partial}: joint RMS {joint:.2f} mrad, tool RMS "
-            f"{tool:.2f} mm\nfigure: {out / 'replay.png'}")  # fmt: skip
+            f"{tool:.2f} mm\n{_safety(replayer, sim, recording.robot)}\n"
+            f"figure: {out / 'replay.png'}")  # fmt: skip
+
+
+def _safety(replayer: Replayer, sim: SimulationResult, robot: RobotDescription) -> str:
+    """One line: what the supervisor did during the replay, and the largest torque used.
+
+    A replay the supervisor braked or held off a soft limit, or one at its torque limit,
+    does not follow the plan: its errors say how far, this line says why (a UR5 replayed at
+    its shortest time scale ran joint 4 at 3.58 rad/s, 12 % over its limit, braked, with
+    "joint RMS 4.07 mrad" printed alone).
+    """
+    events = [e for e in replayer.supervisor.events if e.kind not in ("mode", "reset")]
+    used = np.max(np.abs(sim.tau_command) / robot.torque_limits, axis=0)
+    joint = int(np.argmax(used))
+    torque = f"largest torque {used[joint]:.0%} of joint {joint + 1}'s limit"
+    if not events:
+        return f"safety: no event, {torque}"
+    kinds = ", ".join(sorted({event.kind for event in events}))
+    count = f"{len(events)} event{'s' if len(events) > 1 else ''}"
+    return f"safety: {count} ({kinds}; first: {events[0].detail}), {torque}"
 
 
 def _until_a_fault(recording: Recording) -> tuple[FloatArray, FloatArray, str]:
