@@ -496,7 +496,8 @@ def test_the_replay_summary_says_what_the_supervisor_did(dyn):
     command = np.zeros((3, ROBOT.n_joints))
     command[1, 3] = 0.5 * ROBOT.torque_limits[3]
     sim = SimpleNamespace(tau_command=command)
-    assert _safety(replayer, sim, ROBOT) == "safety: no event, largest torque 50% of joint 4's limit"
+    quiet = "safety: no event, largest torque 50% of joint 4's limit"
+    assert _safety(replayer, sim, ROBOT) == quiet
     replayer.supervisor.log("joint_speed", "joint 4 speed 3.2 rad/s above 3.1 rad/s: braking")
     assert _safety(replayer, sim, ROBOT) == (
         "safety: 1 event (joint_speed; first: joint 4 speed 3.2 rad/s above 3.1 rad/s: "
