@@ -248,6 +248,10 @@ def test_a_cut_or_unfinished_recording_reads_with_a_warning_saying_how_much(tmp_
     cut.write_bytes(path.read_bytes()[: int(0.6 * path.stat().st_size)])
     with pytest.warns(LogWarning, match=r"cut\.mcap: recovered .* without its summary"):
         assert 0 < lt.read_log(cut).n_samples < 500
+    # read with its own robot, or with another one's (taken without a word before)
+    assert lt.read_log(path, robot).n_samples == 500
+    with pytest.raises(LogError, match=r"run\.mcap: recorded on 'ABB YuMi.*', not 'panda'"):
+        lt.read_log(path, lt.robots.panda())
 
 
 @pytest.mark.parametrize(

@@ -31,6 +31,8 @@ from __future__ import annotations
 
 import bisect
 import warnings
+from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from typing import Literal
 
@@ -80,8 +82,9 @@ def read_log(
     if not path.exists():
         raise LogError(f"{path}: no such file")
     kind = format or detect_format(path)
-    readers = {"ur_csv": _read_ur_csv, "panda_txt": _read_panda_txt,
-               "recording": _read_recording, "excitation": _read_excitation}  # fmt: skip
+    readers: dict[str, Callable[[Path], JointLog]] = {
+        "ur_csv": _read_ur_csv, "panda_txt": _read_panda_txt,
+        "recording": partial(_read_recording, robot=robot), "excitation": _read_excitation}  # fmt: skip
     if kind not in readers:
         raise LogError(f"{path}: unknown log format {kind!r} (one of {', '.join(readers)})")
     log = _plausible_period(readers[kind](path))
@@ -307,7 +310,12 @@ def _one_per_line(path: Path) -> FloatArray:
 # --- the project's own files -----------------------------------------------------------
 
 
-def _read_recording(path: Path) -> JointLog:
+def _read_recording(path: Path, robot: RobotDescription | None = None) -> JointLog:
+    """A recording's samples; refused if ``robot`` is not the one it was recorded on.
+
+    A UR10e's recording read with a UR5 was taken without a word (``inspect`` refused it
+    already: a YuMi's read as a Panda's showed 42.7 Nm of "contacts").
+    """
     from leadthrough.errors import RecordingError
     from leadthrough.runtime.recording import read_recording
 
@@ -315,6 +323,8 @@ def _read_recording(path: Path) -> JointLog:
         recording = read_recording(path)
     except RecordingError as error:
         raise LogError(str(error)) from None
+    if robot is not None and recording.robot.name != robot.name:
+        raise LogError(f"{path}: recorded on {recording.robot.name!r}, not {robot.name!r}")
     if not recording.complete:  # a cut, damaged or unfinished file: the user is told how much
         warnings.warn(f"{path}: {recording.recovery}", LogWarning, stacklevel=3)
     extra = {"tau_ext_hat": recording.tau_ext_hat, "tau_ext_std": recording.tau_ext_std}
