@@ -82,9 +82,10 @@ def read_log(
     if not path.exists():
         raise LogError(f"{path}: no such file")
     kind = format or detect_format(path)
+    recording = partial(_read_recording, robot=robot)  # checks the robot it was made on
     readers: dict[str, Callable[[Path], JointLog]] = {
-        "ur_csv": _read_ur_csv, "panda_txt": _read_panda_txt,
-        "recording": partial(_read_recording, robot=robot), "excitation": _read_excitation}  # fmt: skip
+        "ur_csv": _read_ur_csv, "panda_txt": _read_panda_txt, "recording": recording,
+        "excitation": _read_excitation}  # fmt: skip
     if kind not in readers:
         raise LogError(f"{path}: unknown log format {kind!r} (one of {', '.join(readers)})")
     log = _plausible_period(readers[kind](path))
