@@ -120,6 +120,49 @@ def test_ctrl_c_brings_the_moving_arm_to_the_safe_stop_and_closes_the_robot():
     assert np.max(np.abs(twin.truth.qd)) < 0.01  # stopped within the 0.5 s of the safe stop
 
 
+class InterruptedAgain(ClosableTwin):
+    """A twin whose reading is interrupted once by Ctrl-C at ``again`` [s] (a second one)."""
+
+    def __init__(self, *args, again: float, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.again, self.sent_after = again, 0
+
+    def read_state(self):
+        """Raise KeyboardInterrupt once, at ``again``."""
+        if self.again <= self.time:
+            self.again = np.inf
+            raise KeyboardInterrupt
+        return super().read_state()
+
+    def send_torque(self, tau) -> None:
+        """Count what is sent once the second Ctrl-C came."""
+        self.sent_after += self.again == np.inf
+        super().send_torque(tau)
+
+
+def test_a_second_ctrl_c_does_not_cut_the_safe_stop_short():
+    """Ctrl-C, then another 40 ms into the safe stop: it goes on, the arm stops, logged.
+
+    Before, the second one ended the stop after 3 periods and the robot was closed with
+    the arm still moving at 0.30 rad/s (a review, on a Panda at 1 kHz).
+    """
+    twin = InterruptedAgain(ROBOT, operator=pulling_hand(stop=0.4), again=0.44)
+    ctl = controller()
+
+    def interrupt(state, command) -> None:
+        if state.t >= 0.4 - 1e-9:
+            raise KeyboardInterrupt
+
+    try:
+        report = lt.control_loop(twin, ctl, after_period=interrupt, stop_time=0.5)
+    except KeyboardInterrupt:  # as pytest would take it: the whole session stopped
+        pytest.fail("the second Ctrl-C escaped the safe stop")
+    assert "Ctrl-C" in report.ended and twin.closed
+    assert twin.sent_after >= 100  # the rest of the 0.5 s stop: 115 periods at 4 ms
+    assert np.max(np.abs(twin.truth.qd)) < 0.01
+    assert any("Ctrl-C during the safe stop" in e.detail for e in ctl.supervisor.events)
+
+
 class LastCommandHeld(ClosableTwin):
     """The twin as a drive that holds the last torque it got until the next one comes."""
 

@@ -306,11 +306,11 @@ class ActiveLaw:
             qd: Joint velocities [rad/s].
             gravity: G(q) [Nm].
         """
+        qd = self.sliding_velocity(qd)  # a method: an experiment's law may see another
         if not self.compiled:
-            self._update_drive(estimate, q, self.sliding_velocity(qd), gravity)
+            self._update_drive(estimate, q, qd, gravity)
             return self.drive
-        sliding_velocity(qd, self.parameters.rest_velocity, self._sliding)
-        self.friction.terms_into(self._sliding, q, self._terms)  # the rows the compiled drive reads
+        self.friction.terms_into(qd, q, self._terms)  # the rows the compiled drive reads
         bias, (level, viscous, upper, lower) = self.model_error, self._term_rows
         operator_drive(estimate, q, gravity, level, viscous, upper, lower,
             self._joint_constants, self._drive_scalars, self.narrowing, bias.bias,

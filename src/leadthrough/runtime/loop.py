@@ -248,17 +248,22 @@ def _safe_stop(
 
     ``t`` is the time of the latest sample [s] on the robot's clock (the fault's). A safe
     stop that cannot be sent (the robot gone) is logged as a ``safe_stop_failed`` event;
-    the robot's brakes are then all there is. ``close`` False leaves the robot open, held.
+    the robot's brakes are then all there is. A Ctrl-C during it is logged and the stop goes
+    on for its ``stop_time``. ``close`` False leaves the robot open, held.
     """
     supervisor.stop(reason, t)
     try:
         nothing = np.zeros(robot.n_joints)
         for _ in range(max(1, round(stop_time / robot.dt))):
-            state = robot.read_state()
-            # checked first: interrupted before any sample was stepped (in the warm-up, or
-            # the first read failing), the supervisor has no good position to hold yet
-            supervisor.check(state.t, state.q, state.qd, state.tau_measured)
-            robot.send_torque(supervisor.command(state.t, state.q, state.qd, nothing))
+            try:
+                state = robot.read_state()
+                # checked first: interrupted before any sample was stepped (in the warm-up,
+                # or the first read failing), the supervisor has no good position to hold yet
+                supervisor.check(state.t, state.q, state.qd, state.tau_measured)
+                robot.send_torque(supervisor.command(state.t, state.q, state.qd, nothing))
+            except KeyboardInterrupt:  # a second Ctrl-C: the stop goes on (it ended it, and
+                # the robot was closed with the arm still moving at 0.3 rad/s)
+                supervisor.log("safe_stop", "Ctrl-C during the safe stop: it goes on")
     except Exception as error:
         supervisor.log("safe_stop_failed", f"the safe stop could not be sent: "
                        f"{type(error).__name__}: {error}; closing the robot")  # fmt: skip
