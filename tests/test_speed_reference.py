@@ -46,7 +46,9 @@ joint that crept (``DitherParameters.creep``), then the gravity the calibration 
 known to its readings' scatter in each joint's band (``LeadThrough.joint_std``; the calibrated
 idle twin's outputs moved by 2e-9), then each joint's confidence in its gravity model grown
 only as fast as it slides with nobody guiding, not at rest (``ModelErrorBias.update``: the
-active cases without an accepted calibration moved). A faster step must reproduce them.
+active cases without an accepted calibration moved), then the joints' estimates read as a
+force at the tool or a push elsewhere, weighed by their evidence (``tool_force``, the
+mixture). A faster step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::

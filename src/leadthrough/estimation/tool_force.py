@@ -22,6 +22,20 @@ a joint whose own std is small keeps its reading (``s ≪ σ_ε``); a sticking o
 share of the force the others read, and its std narrows as far as they determine it.
 A 3 × 3 solve per period (:func:`fuse`, compiled); :func:`fuse_reference` is the same
 posterior from the n × n covariances, what the tests hold it to.
+
+The hand may push elsewhere: on a link, or a joint by itself. The second hypothesis gives
+each joint a torque of the same size as a force at the tool would, but each its own,
+
+    τ_i ~ N(0, σ_f² ‖J_v,i‖² + σ_ε,i²)   independently,
+
+and the two are weighed by how well each explains the readings (their evidence,
+``N(τ̂; 0, C)`` with ``C_tool = σ_f² J_vᵀ J_v + D``, computed from the same 3 × 3 form:
+``τ̂ᵀ C⁻¹ τ̂ = Σ τ̂_i² / D_ii − b̂ᵀ f̂`` and ``det C = det D · σ_f⁶ · det A``) and
+``ToolForceParameters.tool_prior``. The estimate is the mixture of the two posteriors, its
+std the mixture's. Readings a force at the tool loads together keep the tool's posterior
+(weight ≈ 1); a push it cannot make (a UR10e's joint 4 pushed alone with 8 Nm, read 4.6
+by the tool's model) keeps each joint's own. :func:`mixture_reference` computes it from the
+n × n covariances.
 """
 
 from __future__ import annotations
@@ -49,14 +63,31 @@ class ToolForceParameters:
             joint, relative to its Coulomb level [–]. A sliding joint (std ≪ σ_ε) keeps its
             own reading; a sticking one (std ≈ τ_C) takes most of its value from the
             force the others read.
+        tool_prior: Probability that the hand pushes at the tool rather than elsewhere
+            before any reading [–], in (0, 1); 0.5: neither is favoured. None: the tool's
+            model only (a push elsewhere is read as far as a force at the tool explains it).
     """
 
     force_std: float = 100.0
     spread: float = 0.3
+    tool_prior: float | None = 0.5
 
     def __post_init__(self) -> None:
         real("force_std", self.force_std, minimum=0.0, strict=True, error=ParameterError)
         real("spread", self.spread, minimum=0.0, strict=True, error=ParameterError)
+        if self.tool_prior is not None:
+            prior = real("tool_prior", self.tool_prior, minimum=0.0, strict=True,
+                         error=ParameterError)  # fmt: skip
+            if prior >= 1.0:
+                raise ParameterError("tool_prior", f"must be below 1 (None: the tool only), "
+                                     f"got {prior:g}")  # fmt: skip
+
+    @property
+    def log_prior_odds(self) -> float:
+        """``log(p / (1 − p))`` of ``tool_prior`` p; +inf for None (the tool's model only)."""
+        if self.tool_prior is None:
+            return math.inf
+        return math.log(self.tool_prior / (1.0 - self.tool_prior))
 
 
 class ToolForceFusion:
@@ -78,13 +109,16 @@ class ToolForceFusion:
         self.mean = np.zeros(friction.n_joints)
         self.std = np.zeros(friction.n_joints)
         self.updated = False
+        #: the posterior probability that the hand pushes at the tool, latest period [–]
+        self.weight = 1.0
         self._prior_precision = 1.0 / parameters.force_std**2
+        self._log_prior_odds = parameters.log_prior_odds
         self._work = np.zeros((3, 8))  # the kernel's scratch space: no allocation per period
 
     def update(self, estimate: FloatArray, std: FloatArray, jacobian: FloatArray) -> FloatArray:
         """Fuse this period's estimates (see :func:`fuse`); returns :attr:`mean` [Nm]."""
-        _fuse(estimate, std, jacobian, self.other_std, self._prior_precision, self.mean,
-              self.std, self._work)  # fmt: skip
+        self.weight = _fuse(estimate, std, jacobian, self.other_std, self._prior_precision,
+                            self._log_prior_odds, self.mean, self.std, self._work)  # fmt: skip
         self.updated = True
         return self.mean
 
@@ -110,9 +144,35 @@ def fuse_reference(
     return gain @ estimate, np.sqrt(np.maximum(np.diag(covariance), 0.0))
 
 
+def mixture_reference(
+    estimate: FloatArray, std: FloatArray, jacobian: FloatArray, other_std: FloatArray,
+    force_std: float, tool_prior: float,
+) -> tuple[FloatArray, FloatArray, float]:  # fmt: skip
+    """The mixture of the module docstring from the n × n covariances: mean, std, weight.
+
+    Arguments as :func:`fuse_reference`'s, and ``tool_prior`` in (0, 1); the weight is the
+    posterior probability of the force at the tool.
+    """
+    translational = np.asarray(jacobian, dtype=float)[:3]
+    s2 = np.asarray(std, dtype=float) ** 2
+    tool_mean, tool_std = fuse_reference(estimate, std, jacobian, other_std, force_std)
+    elsewhere = force_std**2 * np.sum(translational**2, axis=0) + other_std**2
+    covariances = (force_std**2 * translational.T @ translational + np.diag(other_std**2 + s2),
+                   np.diag(elsewhere + s2))  # fmt: skip
+    evidence = [-0.5 * (estimate @ np.linalg.solve(c, estimate) + np.linalg.slogdet(c)[1])
+                for c in covariances]  # fmt: skip
+    odds = evidence[0] - evidence[1] + math.log(tool_prior / (1.0 - tool_prior))
+    weight = 0.5 * (1.0 + math.tanh(0.5 * odds))  # 1 / (1 + e^(−odds)), without overflow
+    share = elsewhere / (elsewhere + s2)  # of each joint's own reading, under the second
+    other_mean, other_var = estimate * share, s2 * share
+    mean = weight * tool_mean + (1.0 - weight) * other_mean
+    second = weight * (tool_std**2 + tool_mean**2) + (1.0 - weight) * (other_var + other_mean**2)
+    return mean, np.sqrt(np.maximum(second - mean**2, 0.0)), weight
+
+
 def fuse(
     estimate: FloatArray, std: FloatArray, jacobian: FloatArray, other_std: FloatArray,
-    force_std: float, mean: FloatArray, fused_std: FloatArray,
+    force_std: float, mean: FloatArray, fused_std: FloatArray, tool_prior: float | None = None,
 ) -> tuple[FloatArray, FloatArray]:  # fmt: skip
     """:func:`fuse_reference` by the 3 × 3 form of the module docstring, into the outputs.
 
@@ -124,17 +184,22 @@ def fuse(
         force_std: σ_f [N].
         mean: Written: the posterior mean [Nm], (n,).
         fused_std: Written: the posterior std [Nm], (n,).
+        tool_prior: None: the tool's posterior; else the mixture with a push elsewhere
+            (:func:`mixture_reference`).
     """
-    _fuse(estimate, std, jacobian, other_std, 1.0 / force_std**2, mean, fused_std,
+    odds = ToolForceParameters(tool_prior=tool_prior).log_prior_odds
+    _fuse(estimate, std, jacobian, other_std, 1.0 / force_std**2, odds, mean, fused_std,
           np.zeros((3, 8)))  # fmt: skip
     return mean, fused_std
 
 
 @kernel
-def _fuse(estimate, std, jacobian, other_std, prior_precision, mean, fused_std, work):
-    """:func:`fuse` in place, by the 3 × 3 form of the module docstring.
+def _fuse(estimate, std, jacobian, other_std, prior_precision, log_prior_odds, mean, fused_std,
+          work):  # fmt: skip
+    """:func:`fuse` in place, by the 3 × 3 form of the module docstring; the tool's weight.
 
     ``work`` (3, 8) is scratch space: A, A⁻¹, J_v D⁻¹ τ̂ and f̂ in columns 0–2, 3–5, 6, 7.
+    ``log_prior_odds`` +inf: the tool's posterior alone (weight 1).
     """
     n = estimate.shape[0]
     work[:] = 0.0
@@ -173,3 +238,32 @@ def _fuse(estimate, std, jacobian, other_std, prior_precision, mean, fused_std, 
         mean[i] = estimate[i] - s2 * w * (estimate[i] - along)
         variance = s2 - s2 * s2 * (w - quadratic * w * w)
         fused_std[i] = math.sqrt(variance) if variance > 0.0 else 0.0
+    if not log_prior_odds < math.inf:
+        return 1.0
+    # the evidence of each hypothesis, log N(τ̂; 0, C) but the common −n/2 log 2π
+    explained = b[0] * force[0] + b[1] * force[1] + b[2] * force[2]
+    tool = math.log(determinant) - 3.0 * math.log(prior_precision) - explained
+    other = 0.0
+    for i in range(n):
+        d = std[i] * std[i] + other_std[i] * other_std[i]
+        tool += estimate[i] * estimate[i] / d + math.log(d)
+        elsewhere = (jacobian[0, i] ** 2 + jacobian[1, i] ** 2 + jacobian[2, i] ** 2) / (
+            prior_precision) + other_std[i] * other_std[i]  # fmt: skip
+        d = elsewhere + std[i] * std[i]
+        other += estimate[i] * estimate[i] / d + math.log(d)
+    odds = 0.5 * (other - tool) + log_prior_odds
+    weight = 1.0 / (1.0 + math.exp(-odds)) if odds > -700.0 else 0.0
+    for i in range(n):  # the mixture of the two posteriors
+        s2 = std[i] * std[i]
+        elsewhere = (jacobian[0, i] ** 2 + jacobian[1, i] ** 2 + jacobian[2, i] ** 2) / (
+            prior_precision) + other_std[i] * other_std[i]  # fmt: skip
+        own_mean = estimate[i] * elsewhere / (elsewhere + s2)
+        own_variance = s2 * elsewhere / (elsewhere + s2)
+        tool_mean, tool_variance = mean[i], fused_std[i] * fused_std[i]
+        mixed = weight * tool_mean + (1.0 - weight) * own_mean
+        second = weight * (tool_variance + tool_mean * tool_mean) + (1.0 - weight) * (
+            own_variance + own_mean * own_mean)  # fmt: skip
+        mean[i] = mixed
+        variance = second - mixed * mixed
+        fused_std[i] = math.sqrt(variance) if variance > 0.0 else 0.0
+    return weight
