@@ -45,6 +45,7 @@ from leadthrough.control.calibration import Calibration
 from leadthrough.control.calibration import run as calibration_run
 from leadthrough.control.feedforward import PassiveFeedForward
 from leadthrough.control.lead_through import LeadThrough
+from leadthrough.estimation.tool_force import ToolForceParameters
 from leadthrough.experiments.guiding import Case, default_factory, run_case, uncalibrated_factory
 from leadthrough.friction.compensation import compensation_ceiling
 from leadthrough.twin.plants import WIDER_RANGES, PlantRanges, sample_plant
@@ -430,7 +431,9 @@ def test_a_joint_running_ahead_of_its_references_is_braked_not_followed(cls, run
     and the references are not unwound, each joint's Coulomb band is its own, the
     compensation the thesis' and the resting reference drawn after a joint that moves (as
     when the case was found; today's reference stays, which also stops it), and the
-    measurement delay as told (the plant's, read from the data, also stops it).
+    measurement delay as told (the plant's, read from the data, also stops it), and the
+    joints read together as a force at the tool alone (with a push elsewhere weighed in,
+    the re-anchored arm stops too).
     """
     monkeypatch.setattr(calibration_run, "_JUMPING", np.inf)
     _calibration_of_the_time(monkeypatch)
@@ -443,7 +446,9 @@ def test_a_joint_running_ahead_of_its_references_is_braked_not_followed(cls, run
         settled_after_moving_joints(monkeypatch)
 
     def factory(robot, mode):
-        parameters = lt.LeadThroughParameters(unwind_time=None)
+        parameters = lt.LeadThroughParameters(
+            unwind_time=None, tool_force=ToolForceParameters(tool_prior=None)
+        )
         return cls(robot, mode=mode, dt=0.004, parameters=parameters, calibrate=True)
 
     result = run_case(RUNS_AHEAD, "active", factory)

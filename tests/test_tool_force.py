@@ -139,6 +139,9 @@ def test_parameters_are_checked_and_none_keeps_each_joints_estimate():
         ToolForceParameters(spread=-1.0)
     with pytest.raises(ParameterError, match="force_std"):
         ToolForceParameters(force_std=0.0)
+    for prior in (0.0, 1.0, 1.5, math.nan, "half"):
+        with pytest.raises(ParameterError, match="tool_prior"):
+            ToolForceParameters(tool_prior=prior)
     parameters = lt.LeadThroughParameters(tool_force=None)
     controller = lt.LeadThrough(ROBOT, "active", 0.004, parameters=parameters)
     q = ROBOT.home()

@@ -121,11 +121,11 @@ def test_a_compiled_kernel_replaces_its_wrapper_in_the_package():
 
     jacobian, estimate = np.ones((6, 3)), np.array([1.0, 2.0, 3.0])
     std, other, mean, fused_std = np.ones(3), np.ones(3), np.empty(3), np.empty(3)
-    wrapper(estimate, std, jacobian, other, 1e-4, mean, fused_std, np.zeros((3, 8)))
+    wrapper(estimate, std, jacobian, other, 1e-4, 0.0, mean, fused_std, np.zeros((3, 8)))
     bound = tool_force._fuse
     assert bound is not wrapper and type(bound).__module__.startswith("numba")
     again, again_std = np.empty(3), np.empty(3)
-    bound(estimate, std, jacobian, other, 1e-4, again, again_std, np.zeros((3, 8)))
+    bound(estimate, std, jacobian, other, 1e-4, 0.0, again, again_std, np.zeros((3, 8)))
     np.testing.assert_array_equal(again, mean)
     assert bound.py_func is wrapper.py_func
 
