@@ -610,6 +610,9 @@ def test_a_jittery_clock_with_a_gap_is_no_rate_fault():
         t += 0.004 * (1.0 + rng.uniform(-0.4, 0.4)) + (0.24 if k == 300 else 0.0)
         controller.step(JointState(t, ROBOT.home(), np.zeros(N), None))
     assert controller.state is not SupervisorState.FAULT, controller.supervisor.fault_reason
+    # the gap is an event, the jitter is not: 60 samples were lost
+    (lost,) = [e.detail for e in controller.supervisor.events if e.kind == "samples_lost"]
+    assert lost.startswith("no sample for 24") and "(60 periods lost)" in lost, lost
 
 
 def test_a_first_sample_with_a_bad_torque_holds_the_arm_where_it_reads():

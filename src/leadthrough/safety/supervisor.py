@@ -273,11 +273,25 @@ class SafetySupervisor:
         if value is None:
             return problem
         self._t = value
+        if problem is None and self._t_checked is not None:
+            self._note_lost_samples(value - self._t_checked)
         if self._t_checked is None or value > self._t_checked:
             self._t_checked, self._stalled = value, 0
         else:
             self._stalled += 1
         return problem or clock_stopped(self._stalled, self.dt, gap) or self._rate(value)
+
+    def _note_lost_samples(self, elapsed: float) -> None:
+        """An event for samples lost between two stamps ``elapsed`` [s] apart, if any.
+
+        Beyond :data:`LOST_SAMPLES` periods (a stamp's jitter within the rate check stays
+        below it) and within ``max_time_gap`` (beyond it is a fault): the drive held its
+        last command meanwhile. At 1 kHz, 250 lost samples passed without a word.
+        """
+        if elapsed > LOST_SAMPLES * self.dt:
+            lost = round(elapsed / self.dt) - 1
+            self._log("samples_lost", f"no sample for {elapsed * 1e3:.3g} ms ({lost} "
+                      "periods lost): the drive held its last command")  # fmt: skip
 
     def _rate(self, t: float) -> str | None:
         """Why the stamps' mean period over the window ending at ``t`` [s] is not ``dt``."""
@@ -492,5 +506,8 @@ class SafetySupervisor:
         self._log_book.clear()
 
 
+#: Time between two stamps [periods] beyond which samples count as lost (an event): above
+#: the 1.8 periods two stamps jittered ±40 % can be apart.
+LOST_SAMPLES = 2.5
 #: Placeholder reason while a fault is latched: ``_fault`` keeps the first reason only.
 _UNEXPLAINED = "invalid sample"
