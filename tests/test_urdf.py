@@ -7,6 +7,7 @@ import pinocchio as pin
 import pytest
 
 import leadthrough as lt
+from leadthrough.model.robots import GripperJointWarning
 
 PANDA = "panda_description/urdf/panda.urdf"
 UR5 = "ur_description/urdf/ur5_robot.urdf"
@@ -117,11 +118,29 @@ def _error(path: Path, **kwargs) -> lt.RobotDescriptionError:
     return info.value
 
 
-def test_panda_without_tip_is_not_a_serial_chain(robots_dir):
-    """The panda without a tip fails: its two fingers branch off joint 7."""
-    error = _error(robots_dir / PANDA)
-    assert "not a serial chain" in str(error)
-    assert error.field == "tip"
+def test_panda_without_tip_is_taken_up_to_its_hand_with_a_warning(robots_dir):
+    """Its two fingers branch off the hand: the arm is taken up to it, as with tip="panda_hand".
+
+    Before, it was an error ("not a serial chain"), though example-robot-data's Panda is
+    the arm a user tries first. A branch of joints not named as a gripper's still is one.
+    """
+    with pytest.warns(GripperJointWarning, match=r"'panda_finger_joint1', 'panda_finger_joint2' "
+                      r"are a gripper's.*tip='panda_hand'"):  # fmt: skip
+        robot = lt.robots.from_urdf(robots_dir / PANDA)
+    given = lt.robots.from_urdf(robots_dir / PANDA, tip="panda_hand")
+    assert robot.n_joints == given.n_joints == 7
+    q = robot.home() + 0.2
+    np.testing.assert_array_equal(lt.Dynamics(robot).pose(q), lt.Dynamics(given).pose(q))
+    np.testing.assert_array_equal(lt.Dynamics(robot).mass(q), lt.Dynamics(given).mass(q))
+
+
+def test_a_branch_not_named_as_a_gripper_is_no_serial_chain(robots_dir, tmp_path):
+    """The Panda with its finger joints renamed: the tree branches, a one-line error."""
+    text = (robots_dir / PANDA).read_text(encoding="utf-8").replace("finger_joint", "slide_joint")
+    path = tmp_path / "panda.urdf"
+    path.write_text(text, encoding="utf-8")
+    error = _error(path)
+    assert "not a serial chain" in str(error) and error.field == "tip"
 
 
 def test_unknown_tip_is_named(robots_dir):

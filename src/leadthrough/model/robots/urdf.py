@@ -92,7 +92,9 @@ def from_urdf(
         AssumedDriveDataWarning: Once, naming what neither the arguments, the URDF nor
             the drive data give (gear ratios, rotor inertias, friction, home pose) and
             what is assumed instead.
-        GripperJointWarning: Without ``tip``, the chain's last joint is named as a
+        GripperJointWarning: Without ``tip``, the arm is taken up to the link that two or
+            more joints named as a gripper's hang from (the Panda's hand); or the chain's
+            last joint is named as a
             gripper's (``grip``, ``finger``, ``jaw``, ``claw``): it would be guided as an
             arm joint.
 
@@ -112,6 +114,7 @@ def from_urdf(
         root = _xml(text)
         check_urdf(root, source)
         text, continuous = _bounded_continuous_joints(text, root)
+        tip = tip if tip is not None else _hand_of_the_gripper(root, source)
         text = _without_tools_beyond(text, tip)
         full = pin.buildModelFromXML(text)
     except RobotDescriptionError:
@@ -259,6 +262,28 @@ def _warn_gripper_joint(text: str, joint: str, source: str) -> None:
     warnings.warn(f"{source}: the chain ends in joint {joint!r}, which its name says is a "
                   f"gripper's; name the flange link{parent} to guide the arm without it",
                   GripperJointWarning, stacklevel=3)  # fmt: skip
+
+
+def _hand_of_the_gripper(root: ElementTree.Element, source: str) -> str | None:
+    """The link two or more gripper joints hang from, taken as the tip (warned), or None.
+
+    Without ``tip``, fingers that branch off the arm's last link (the Panda of
+    ``example-robot-data``: two finger joints on ``panda_hand``) made the arm no serial
+    chain, an error. The joints' names say they are a gripper's (:data:`_GRIPPER_NAME`);
+    when they all hang from one link, the arm is taken up to it, the fingers locked.
+    """
+    moving = ("revolute", "continuous", "prismatic")
+    gripper = [joint for joint in root.findall("joint") if joint.get("type") in moving
+               and _GRIPPER_NAME.search(str(joint.get("name")))]  # fmt: skip
+    parents = {str(joint.find("parent").get("link")) for joint in gripper}  # type: ignore[union-attr]
+    if len(gripper) < 2 or len(parents) != 1:
+        return None
+    hand = parents.pop()
+    names = ", ".join(repr(joint.get("name")) for joint in gripper)
+    warnings.warn(f"{source}: joints {names} are a gripper's, their names say: the arm is "
+                  f"taken up to the link they hang from (tip={hand!r}), the gripper locked; "
+                  "name another tip to choose", GripperJointWarning, stacklevel=3)  # fmt: skip
+    return hand
 
 
 def _single_leaf(model: pin.Model) -> int:
