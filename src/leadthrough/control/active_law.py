@@ -274,10 +274,6 @@ class ActiveLaw:
         np.divide(fused_std, np.maximum(own_std, 1e-9), out=self.narrowing)
         np.minimum(self.narrowing, 1.0, out=self.narrowing)
 
-    def friction_terms(self, q: FloatArray, qd: FloatArray) -> FloatArray:
-        """The friction model's terms at (q̇, q) for this period (``terms_into``), (4, n)."""
-        return self.friction.terms_into(qd, q, self._terms)
-
     def sliding_velocity(self, qd: FloatArray) -> FloatArray:
         """``sign(q̇) · max(|q̇| − v_rest, 0)`` [rad/s]: the speed the law's friction sees.
 

@@ -255,9 +255,7 @@ class SafetySupervisor:
         """
         if position is None:  # not read (``floats`` gives floats when it is)
             return False
-        limits = self._limits
-        return bool(position.shape == (self.n,) and np.all(position >= limits.q_low)
-                    and np.all(position <= limits.q_high))  # fmt: skip
+        return in_range((position,), self._limits.q_low, self._limits.q_high, self.n)
 
     def _time_problem(self, t: object) -> str | None:
         """Why the stamp ``t`` cannot be used, or None; keeps the latest stamp.
