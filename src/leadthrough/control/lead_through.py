@@ -44,6 +44,7 @@ from leadthrough.control.calibration import (
     Calibration,
     CalibrationParameters,
     CalibrationRun,
+    TickClock,
     gravity_share,
 )
 from leadthrough.control.constraints import VirtualConstraint, constraint_torque
@@ -392,7 +393,8 @@ class LeadThrough:
         self.level_error: MeasuredLevelError | None = self._identified_level_error()
         self._level_errors = np.zeros(n)  # its value at the latest sample [–]
         self._calibration_run: CalibrationRun | None = None
-        self._calibration_start = 0.0  # [s], set when the first sample arrives
+        # the calibration's time: its samples' ticks (a driver's stamps may jitter)
+        self._calibration_clock = TickClock(self.dt)
         self._calibrating = self.calibrate  # the supervisor stays in TEACHING
 
     def set_payload(self, mass: float, com: ArrayLike = (0.0, 0.0, 0.0)) -> None:
@@ -597,8 +599,7 @@ class LeadThrough:
                                                    self.calibration_parameters,
                                                    self.parameters.gravity_uncertainty,
                                                    self.dt, self._calibration_damping)  # fmt: skip
-            self._calibration_start = t
-        run, elapsed = self._calibration_run, t - self._calibration_start
+        run, elapsed = self._calibration_run, self._calibration_clock(t)
         applied, _ = self._measured(tau_measured)
         # what the drive measured against what it was told (once a command has reached it)
         told = elapsed >= self._sent.delay * self.dt
