@@ -340,10 +340,10 @@ class _NoCreditAtRest(lt.LeadThrough):
         update = reported.update
         operator_torque = functools.partial(type(self.law).operator_torque, self.law)
 
-        def both(q: Any, qd: Any, tau: Any, model: Any = None) -> Any:
+        def both(q: Any, qd: Any, tau: Any, model: Any = None, periods: int = 1) -> Any:
             credited = reported.friction.mean(self.law.sliding_velocity(qd), q)
-            reading.update(q, qd, tau, model, friction_mean=credited)
-            return update(q, qd, tau, model)
+            reading.update(q, qd, tau, model, friction_mean=credited, periods=periods)
+            return update(q, qd, tau, model, periods=periods)
 
         def from_reading(estimate: Any, q: Any, qd: Any, gravity: Any) -> Any:
             own = reading.tau_ext_hat

@@ -7,7 +7,7 @@ import numpy as np
 from leadthrough.control import active_law, admittance, dither, feedforward
 from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.bias import ModelErrorBias
-from leadthrough.control.calibration import CalibrationParameters, CalibrationRun
+from leadthrough.control.calibration import CalibrationParameters, CalibrationRun, TickClock
 from leadthrough.control.calibration import run as calibration_run
 from leadthrough.control.dither import DitherParameters
 from leadthrough.control.feedforward import PassiveFeedForward
@@ -33,6 +33,23 @@ def slow_calibration_motion(monkeypatch) -> None:
     the public API exactly as it did when it was found.
     """
     built_as(monkeypatch, CalibrationParameters(**SLOW))
+    stamped_calibration(monkeypatch)
+
+
+def stamped_calibration(monkeypatch) -> None:
+    """The calibration's time is the stamps' as they come, not their ticks (``TickClock``).
+
+    The twin's stamps are sums of periods, off their ticks by 1e-16 s; the calibration's
+    triangular motion turns at whole periods, and a stamp a hair before or after a turn
+    takes the quarter before or after it: the cases were found with the sums.
+    """
+
+    def stamps(clock, t):
+        if clock.start is None:
+            clock.start = t
+        return t - clock.start
+
+    monkeypatch.setattr(TickClock, "__call__", stamps)
 
 
 def six_hertz_calibration(monkeypatch) -> None:

@@ -161,9 +161,9 @@ def test_one_delay_line_for_the_command_and_its_dither(monkeypatch, delay):
     controller = lt.LeadThrough(ROBOT, "passive", parameters=parameters)
     seen, update = [], controller.observer.update
 
-    def spying(q, qd, tau, model=None, terms=None):
+    def spying(q, qd, tau, model=None, terms=None, periods=1):
         seen.append(tau)
-        return update(q, qd, tau, model, terms)
+        return update(q, qd, tau, model, terms, periods=periods)
 
     monkeypatch.setattr(controller.observer, "update", spying)
     q, commands, dithers = ROBOT.home(), [], []
@@ -613,6 +613,30 @@ def test_a_jittery_clock_with_a_gap_is_no_rate_fault():
     # the gap is an event, the jitter is not: 60 samples were lost
     (lost,) = [e.detail for e in controller.supervisor.events if e.kind == "samples_lost"]
     assert lost.startswith("no sample for 24") and "(60 periods lost)" in lost, lost
+
+
+def test_the_observer_predicts_over_the_periods_lost(monkeypatch):
+    """Stamps jittering ±30 % with 60 samples lost: the observer is told 61 periods once.
+
+    Every other sample is one period after the one before, whatever its jitter (the
+    samples' ticks, :class:`~leadthrough.control.calibration.TickClock`). Before, it
+    predicted over one period always (``tests/test_observer.py``: a push read into the gap).
+    """
+    rng = np.random.default_rng(7)
+    controller = lt.LeadThrough(ROBOT, "passive", dt=0.004)
+    told: list[int] = []
+    update = controller.observer.update
+
+    def counted(*args, periods: int = 1, **kwargs):
+        told.append(periods)
+        return update(*args, periods=periods, **kwargs)
+
+    monkeypatch.setattr(controller.observer, "update", counted)
+    for k in [*range(300), *range(360, 600)]:
+        t = 0.004 * (k + rng.uniform(-0.3, 0.3))
+        controller.step(JointState(t, ROBOT.home(), np.zeros(N), None))
+    assert controller.state is not SupervisorState.FAULT, controller.supervisor.fault_reason
+    assert told.count(61) == 1 and told.count(1) == len(told) - 1, sorted(set(told))
 
 
 def test_a_first_sample_with_a_bad_torque_holds_the_arm_where_it_reads():

@@ -250,7 +250,7 @@ class MomentumObserver:
         self._level_std = np.ascontiguousarray(self.friction.level_std, dtype=float)
         # the entries of Q_d that do not depend on Q_m (Q_m enters Q₁₁ as Q_m dt), per joint
         self._torque_rows = np.array(process_noise(np.zeros(n), self.torque_noise, self.dt))
-        self._q11_torque, self._q12, self._q22 = self._torque_rows
+        self._gaps: dict[int, tuple[FloatArray, FloatArray]] = {}  # _over's, per gap
         self._noise_d = parameters.measurement_noise / self.dt
         # (dt, friction_noise_scale, R_d) for the compiled step
         self._constants = np.array([self.dt, parameters.friction_noise_scale, self._noise_d])
@@ -327,6 +327,7 @@ class MomentumObserver:
         model: ModelSnapshot | None = None,
         terms: FloatArray | None = None,
         friction_mean: FloatArray | None = None,
+        periods: int = 1,
     ) -> FloatArray:
         """One filter step with the state now and the motor torque of the last period.
 
@@ -344,6 +345,10 @@ class MomentumObserver:
                 :attr:`error_std`, stay the model's at q̇): a caller that knows better
                 whether the joint slides passes its own (e.g. none below a rest
                 velocity: docs/active_mode_log.md, *Friction credited to a creep*).
+            periods: Control periods since the sample before: more than one where samples
+                were lost (the drive held its command, ``tau``, over all of them); the
+                filter predicts over all of them, with the drift terms' trapezoid across
+                the gap (over one, the momentum a 100 ms gap built was read as a push).
 
         Returns:
             The estimated external torque [Nm].
@@ -364,6 +369,7 @@ class MomentumObserver:
         self._sample = (q, qd)  # for error_std, computed when read (or by the compiled step)
         self._error_in_filter = False
         compiled = self.compiled and self._levels is None and self._smooth is None
+        torque_rows, constants = self._over(periods)
         if compiled and self._initialised and qd.shape == q.shape:  # time-varying: one pass
             if terms is None:
                 terms = self.friction.terms_into(qd, q, self._terms)
@@ -371,12 +377,13 @@ class MomentumObserver:
             _time_varying_step(self._filter, tau, model.mass, qd, model.coriolis_drift,
                                model.gravity, terms, credited, friction_mean is not None,
                                self.friction.noise_std, self._level_std,
-                               self._torque_rows, self._constants)  # fmt: skip
+                               torque_rows, constants)  # fmt: skip
             self._error_in_filter = True
             return self._tau.copy()
         momentum = model.mass @ qd
         if self._smooth is not None:
-            return self._smooth_rate_update(q, qd, tau, model, momentum, friction_mean)
+            return self._smooth_rate_update(q, qd, tau, model, momentum, friction_mean,
+                                            periods * self.dt)  # fmt: skip
         if self._levels is None:
             model_mean, friction_std = self.friction.mean_and_std(qd, q)
         else:  # the two-level gains need no friction std
@@ -392,9 +399,10 @@ class MomentumObserver:
         # input over the last period: measured torque plus the drift terms (trapezoid)
         u = tau + 0.5 * (drift + self._previous_drift)
         self._previous_drift[:] = drift
-        prior_p = self._p + self.dt * (u + self._tau)
+        dt = float(constants[0])  # over every period since the sample before
+        prior_p = self._p + dt * (u + self._tau)
         innovation = momentum - prior_p
-        gain_p, gain_tau = self._gains(qd, friction_std)
+        gain_p, gain_tau = self._gains(qd, friction_std, torque_rows, dt)
         self._p[:] = prior_p + gain_p * innovation
         self._tau[:] = self._tau + gain_tau * innovation
         return self.tau_ext_hat
@@ -402,10 +410,12 @@ class MomentumObserver:
     def _smooth_rate_update(
         self, q: FloatArray, qd: FloatArray, tau: ArrayLike, model: ModelSnapshot,
         momentum: FloatArray, applied_friction: FloatArray | None = None,
+        interval: float | None = None,
     ) -> FloatArray:  # fmt: skip
         """One step of the smooth-rate variant (same input, eqs. (1)–(3) of its module).
 
-        ``applied_friction``: the caller's ``friction_mean`` of :meth:`update`, if any.
+        ``applied_friction``: the caller's ``friction_mean`` of :meth:`update`, if any;
+        ``interval``: the time since the sample before [s] (None: one period).
         """
         assert self._smooth is not None
         friction_mean, friction_std = self.friction.mean_and_std(qd, q)
@@ -414,7 +424,7 @@ class MomentumObserver:
         if self._initialised:
             u = np.asarray(tau, dtype=float)
             self._smooth.step(self._p, self._tau, u + 0.5 * (drift + self._previous_drift),
-                              momentum)  # fmt: skip
+                              momentum, interval)  # fmt: skip
         else:
             self._p[:] = momentum
             self._initialised = True
@@ -446,8 +456,26 @@ class MomentumObserver:
         _require_finite(("tau", tau))
         return tau
 
+    def _over(self, periods: int) -> tuple[FloatArray, FloatArray]:
+        """Q_d's entries without Q_m, and (dt, scale, R_d), over ``periods`` periods.
+
+        Over one period, the filter's own; over more (samples lost), computed for the
+        gap and kept: a robot that loses samples loses them again, mostly as many.
+        """
+        if periods == 1:
+            return self._torque_rows, self._constants
+        if periods not in self._gaps:
+            interval = periods * self.dt
+            rows = np.array(process_noise(np.zeros_like(self._p), self.torque_noise, interval))
+            self._gaps[periods] = (rows, np.array([interval, *self._constants[1:]]))
+        return self._gaps[periods]
+
     def _gains(
-        self, qd: FloatArray, friction_std: FloatArray | None
+        self,
+        qd: FloatArray,
+        friction_std: FloatArray | None,
+        torque_rows: FloatArray,
+        dt: float,
     ) -> tuple[FloatArray, FloatArray]:
         if self._levels is not None:
             moving = np.abs(qd) > self._levels["threshold"]
@@ -456,18 +484,22 @@ class MomentumObserver:
             return (np.where(moving, levels["k1_moving"], levels["k1_still"]),
                     np.where(moving, levels["k2_moving"], levels["k2_still"]))  # fmt: skip
         assert friction_std is not None  # computed whenever the gains are not two-level
-        return self._covariance_step(self.parameters.friction_noise_scale * friction_std**2)
+        return self._covariance_step(self.parameters.friction_noise_scale * friction_std**2,
+                                     torque_rows, dt)  # fmt: skip
 
-    def _covariance_step(self, model_noise: FloatArray) -> tuple[FloatArray, FloatArray]:
+    def _covariance_step(
+        self, model_noise: FloatArray, torque_rows: FloatArray, dt: float
+    ) -> tuple[FloatArray, FloatArray]:
         """Predict (Φ P Φᵀ + Q_d) and update the 2×2 covariances of all joints; the gains.
 
-        ``model_noise`` is Q_m [Nm²/s]; the other entries of Q_d are constants.
+        ``model_noise`` is Q_m [Nm²/s]; ``torque_rows`` the other entries of Q_d over
+        ``dt`` [s], the time since the sample before (:meth:`_over`).
         """
-        dt = self.dt
         p11, p12, p22 = self._cov_rows
-        prior12 = p12 + dt * p22 + self._q12
-        prior22 = p22 + self._q22
-        prior11 = p11 + dt * (2.0 * p12 + dt * p22) + dt * model_noise + self._q11_torque
+        q11_torque, q12, q22 = torque_rows
+        prior12 = p12 + dt * p22 + q12
+        prior22 = p22 + q22
+        prior11 = p11 + dt * (2.0 * p12 + dt * p22) + dt * model_noise + q11_torque
         k1 = prior11 / (prior11 + self._noise_d)
         k2 = prior12 / (prior11 + self._noise_d)
         keep = 1.0 - k1

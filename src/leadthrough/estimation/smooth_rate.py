@@ -93,9 +93,20 @@ class SmoothRateFilter:
         """Forget the torque rate."""
         self.rate[:] = 0.0
 
-    def step(self, p: FloatArray, tau: FloatArray, u: FloatArray, momentum: FloatArray) -> None:
-        """Predict with the input ``u`` [Nm], correct with ``momentum``; p, τ in place."""
-        dt, rate = self.dt, self.rate
+    def step(
+        self,
+        p: FloatArray,
+        tau: FloatArray,
+        u: FloatArray,
+        momentum: FloatArray,
+        interval: float | None = None,
+    ) -> None:
+        """Predict with the input ``u`` [Nm], correct with ``momentum``; p, τ in place.
+
+        ``interval``: the time since the sample before [s] (None: ``dt``); predicted over
+        it, corrected with the stationary gain (samples lost are few).
+        """
+        dt, rate = self.dt if interval is None else interval, self.rate
         prior_p = p + dt * (u + tau + 0.5 * dt * rate)
         innovation = momentum - prior_p
         p[:] = prior_p + self.gain[0] * innovation
