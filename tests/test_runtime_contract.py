@@ -639,6 +639,30 @@ def test_the_observer_predicts_over_the_periods_lost(monkeypatch):
     assert told.count(61) == 1 and told.count(1) == len(told) - 1, sorted(set(told))
 
 
+@pytest.mark.parametrize("calibrate", [False, True])
+def test_a_measured_torque_of_the_other_sign_is_a_fault(calibrate):
+    """Nobody touching the arm, its measured torque reported with the other sign.
+
+    A fault naming a joint and its slope within 0.5 s, and the arm moves less than 0.2 rad.
+    Before, active mode read twice each command as a push and followed it: the YuMi
+    turned 2.1 rad in 5 s; with a calibration, it was refused as a touch and guiding
+    went on with the same readings (a review).
+    """
+
+    class OtherSign(ShiftedClock):
+        def read_state(self) -> JointState:
+            state = self.twin.read_state()
+            return JointState(state.t, state.q, state.qd, -state.tau_measured)
+
+    twin = DigitalTwin(ROBOT)
+    start = twin.truth.q.copy()
+    controller = lt.LeadThrough(ROBOT, "active", calibrate=calibrate)
+    lt.control_loop(OtherSign(twin, 0.0), controller, duration=2.0, wall_clock=False)
+    (fault,) = [e for e in controller.supervisor.events if e.kind == "fault"]
+    assert fault.t < 0.5 and "the other sign convention" in fault.detail, fault
+    assert np.abs(twin.truth.q - start).max() < 0.2  # [rad]
+
+
 def test_a_first_sample_with_a_bad_torque_holds_the_arm_where_it_reads():
     """A first sample whose position is sound but whose torque is NaN: the gravity hold there.
 

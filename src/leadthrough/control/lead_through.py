@@ -367,7 +367,10 @@ class LeadThrough:
         self._applied = np.zeros(n)  # the motor torque of the last period [Nm] (its ripple)
         #: which command the measured torque holds, read from the data (starts at the
         #: parameters' ``measurement_delay``)
-        self.interface_delay = InterfaceDelay(n, p.measurement_delay, self.dt)
+        # the sign of the measured torque is judged where a command moves by a tenth of
+        # the joint's Coulomb level (the drives' ripple is small beside it)
+        floor = 0.1 * self.nominal_friction.coulomb  # [Nm]
+        self.interface_delay = InterfaceDelay(n, p.measurement_delay, self.dt, floor=floor)
         self._sent = DelayLine((2, n), p.measurement_delay,  # (command, its dither) [Nm]
                                self.interface_delay.longest)  # fmt: skip
         self._own_clock = 0.0  # [s], for the positional form of step, which brings no time
@@ -596,6 +599,9 @@ class LeadThrough:
             sent = self._sent.measured  # rows: the command, its dither
             return sent[0], sent[1]
         delay = self.interface_delay.update(tau_measured)
+        problem = self.interface_delay.gain_problem()
+        if problem is not None:  # not the arm's torque: what the observer reads is not a push
+            self.supervisor.stop(problem, self._t)
         if delay != self._sent.delay:
             self.supervisor.log("measurement_delay", f"the measured torque holds the command "
                                 f"sent {delay} periods before, not {self._sent.delay}")  # fmt: skip
