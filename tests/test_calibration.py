@@ -148,7 +148,10 @@ def test_the_payload_allowed_scales_with_the_arm(yumi):
     heavy = dataclasses.replace(MASSES_OFF, payload=Payload(3.0, (0.0, 0.0, 0.0)))
     controller, _twin, _sim = calibrated(yumi, TwinConfig(model_error=heavy, seed=1))
     assert not controller.calibration.accepted
-    assert "kg allowed: was the arm touched?" in controller.calibration.reason
+    assert (
+        "kg allowed (max_payload): was the arm touched? A tool that heavy: give it with "
+        "set_payload(mass, com), or raise max_payload" in controller.calibration.reason
+    )
 
 
 def test_friction_far_above_the_model_is_measured_not_refused(yumi, monkeypatch):

@@ -217,6 +217,28 @@ def test_a_robot_error_is_raised_after_the_safe_stop():
     assert twin.closed
 
 
+class CloseFails(ClosableTwin):
+    """A twin whose close raises, as a driver's on a socket already gone."""
+
+    def close(self) -> None:
+        """Raise as the socket's close does."""
+        super().close()
+        raise OSError("Bad file descriptor")
+
+
+def test_a_close_that_raises_does_not_hide_the_error_that_ended_the_loop():
+    """The lost connection reaches the caller, the close's error is an event.
+
+    Before, the close's OSError replaced the ConnectionError (a review).
+    """
+    twin, ctl = CloseFails(ROBOT, fail_at=0.1), controller()
+    with pytest.raises(ConnectionError, match="connection lost"):
+        lt.control_loop(twin, ctl, duration=1.0)
+    assert twin.closed
+    (failed,) = [e.detail for e in ctl.supervisor.events if e.kind == "close_failed"]
+    assert failed == "the robot's close raised OSError: Bad file descriptor"
+
+
 @pytest.mark.parametrize(("name", "value"), [("duration", -1.0), ("stop_time", float("nan"))])
 def test_bad_loop_settings_are_refused(name, value):
     """A negative duration or a NaN stop time names the setting."""

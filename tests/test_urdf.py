@@ -134,6 +134,19 @@ def test_panda_without_tip_is_taken_up_to_its_hand_with_a_warning(robots_dir):
     np.testing.assert_array_equal(lt.Dynamics(robot).mass(q), lt.Dynamics(given).mass(q))
 
 
+def test_a_joint_and_a_link_of_one_name_are_a_one_line_error(robots_dir):
+    """example-robot-data's SO-100 names a joint and a link "gripper": a one-line error.
+
+    Before, Pinocchio's ``ValueError: Several frames match the filter`` reached the user
+    as a traceback, with the tip its own warning suggests (a review).
+    """
+    path = robots_dir / "so_arm_description/urdf/so100.urdf"
+    with pytest.raises(lt.RobotDescriptionError) as error:
+        lt.robots.from_urdf(path, tip="gripper")
+    assert "the name 'gripper' is both a joint's and a link's (rename one)" in str(error.value)
+    assert "\n" not in str(error.value)
+
+
 def test_a_branch_not_named_as_a_gripper_is_no_serial_chain(robots_dir, tmp_path):
     """The Panda with its finger joints renamed: the tree branches, a one-line error."""
     text = (robots_dir / PANDA).read_text(encoding="utf-8").replace("finger_joint", "slide_joint")

@@ -184,7 +184,7 @@ def control_loop(
     except BaseException as error:  # Ctrl-C included: the safe stop comes first
         ended = _interruption(error)
         if supervisor is None:
-            robot.close()
+            _close(robot, None)
         else:
             _safe_stop(robot, supervisor, ended, stop_time, t)
         if not isinstance(error, KeyboardInterrupt):
@@ -270,4 +270,19 @@ def _safe_stop(
         close = True
     finally:
         if close:
-            robot.close()
+            _close(robot, supervisor)
+
+
+def _close(robot: RobotInterface, supervisor: SafetySupervisor | None) -> None:
+    """Close the robot; an error of its close is logged, not raised over the one that ended.
+
+    A close that raised replaced the error that ended the loop (a connection reset seen as
+    ``OSError: Bad file descriptor``), and after a Ctrl-C the loop raised it instead of
+    returning its report (a review).
+    """
+    try:
+        robot.close()
+    except Exception as error:
+        if supervisor is not None:
+            supervisor.log("close_failed", f"the robot's close raised "
+                           f"{type(error).__name__}: {error}")  # fmt: skip

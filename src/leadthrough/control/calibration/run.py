@@ -256,7 +256,9 @@ class CalibrationRun:
             joint = int(np.argmax(over))
             self.interrupt(f"joint {joint + 1} was pushed with {estimate[joint]:+.2f} Nm, more "
                            f"than the {self.push_bound[joint]:.2f} Nm its model may be off: "
-                           "was the arm touched? Its friction not measured")  # fmt: skip
+                           "was the arm touched, or does it carry a payload heavier than "
+                           "max_payload (give it with set_payload(mass, com))? Its friction "
+                           "not measured")  # fmt: skip
 
     def interrupt(self, reason: str) -> None:
         """Stop the run for ``reason`` (the first disturbance is the one kept).
@@ -431,8 +433,10 @@ class CalibrationRun:
         allowed = p.payload_limit(self.dynamics.robot)
         if payload > allowed:
             return self._refused(f"a payload of {payload:.2f} kg is more than the "
-                                 f"{allowed:.3g} kg allowed: was the arm touched?", scale,
-                                 measured, offset)  # fmt: skip
+                                 f"{allowed:.3g} kg allowed (max_payload): was the arm "
+                                 "touched? A tool that heavy: give it with set_payload(mass, "
+                                 "com), or raise max_payload", scale, measured,
+                                 offset)  # fmt: skip
         explained = (payload * self.payload_regressor(self.pose)
                      + self.moment_regressor(self.pose) @ moment)  # fmt: skip
         bias = np.where(slid, gravity_error + explained, 0.0)

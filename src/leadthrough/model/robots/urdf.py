@@ -307,7 +307,15 @@ def _lock_off_chain(model: pin.Model, chain: list[int]) -> pin.Model:
     locked = [joint_id for joint_id in range(1, model.njoints) if joint_id not in chain]
     if not locked:
         return model
-    return pin.buildReducedModel(model, locked, pin.neutral(model))
+    try:
+        return pin.buildReducedModel(model, locked, pin.neutral(model))
+    except ValueError as error:  # Pinocchio's, e.g. a joint and a link of one name
+        shared = sorted({frame.name for frame in model.frames if
+                         sum(other.name == frame.name for other in model.frames) > 1})  # fmt: skip
+        why = (f"the name {shared[0]!r} is both a joint's and a link's (rename one)"
+               if shared else str(error).splitlines()[0])  # fmt: skip
+        raise RobotDescriptionError("", "tip", f"the joints off the chain cannot be locked: "
+                                    f"{why}") from None  # fmt: skip
 
 
 def _joints(
