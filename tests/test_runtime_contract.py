@@ -364,6 +364,37 @@ def test_teaching_records_on_any_driver(tmp_path):
     assert recording.complete and "recorded 100 periods" in report.summary()
 
 
+def test_a_sample_out_of_order_is_stepped_not_recorded(tmp_path):
+    """Two samples swapped by the driver: the recording's time still increases.
+
+    Before, the swapped sample was recorded as it came, and the replay refused the whole
+    session ("time not increasing"; a review).
+    """
+
+    class Swapped(ShiftedClock):
+        def __init__(self, twin) -> None:
+            super().__init__(twin, 0.0)
+            self.held: JointState | None = None
+
+        def read_state(self) -> JointState:
+            state = super().read_state()
+            if abs(state.t - 0.2) < 1e-9:  # hold this one back a period
+                self.held = state
+                self.twin.send_torque(self.sent[-1])
+                return super().read_state()
+            if self.held is not None:
+                held, self.held = self.held, None
+                return held
+            return state
+
+    path = tmp_path / "taught.mcap"
+    report = teach(Swapped(pulled_twin()), lt.LeadThrough(ROBOT, "passive"), path,
+                   duration=0.4, wall_clock=False)  # fmt: skip
+    recording = read_recording(path)
+    assert np.all(np.diff(recording.t) > 0.0)
+    assert report.recorded == len(recording.t) == report.loop.periods - 1
+
+
 def test_teaching_does_not_replace_a_recording_unless_asked(tmp_path):
     """A second session to the same file: refused before the arm moves, the first kept.
 

@@ -98,6 +98,32 @@ def test_readings_just_inside_the_margins_are_good(sup):
     assert sup.state is SupervisorState.HOLDING
 
 
+def test_a_reading_that_wraps_around_within_its_range_is_a_fault(sup):
+    """Joint 5 read 2π further on within its range: a fault naming the jump, that sample.
+
+    Before, it was taken (a review: recorded, and the replay planned a full turn).
+    """
+    q = MID.copy()
+    q[4] = 1.5  # [rad]: 2π less is within its ±5.06 rad
+    assert sup.check(0.0, q, np.zeros(N))
+    wrapped = q.copy()
+    wrapped[4] -= 2.0 * np.pi
+    assert ROBOT.q_min[4] < wrapped[4]  # still within its range
+    assert not sup.check(DT, wrapped, np.zeros(N))
+    assert sup.fault_reason.startswith("joint 5's reading jumped -6.283 rad in 4 ms")
+
+
+def test_steps_a_joint_can_take_are_no_jump(sup):
+    """Twice the speed limit for a period, and the speed limit across a 0.24 s gap, pass."""
+    q = MID.copy()
+    assert sup.check(0.0, q, np.zeros(N))
+    q = q + 1.99 * ROBOT.velocity_limits * DT
+    assert sup.check(DT, q, np.zeros(N))
+    q = q - ROBOT.velocity_limits * 0.24
+    assert sup.check(DT + 0.24, q, np.zeros(N))
+    assert sup.state is SupervisorState.HOLDING
+
+
 def test_frozen_encoder_faults_after_exactly_stale_periods(dyn):
     """Joint 4 bit-identical for stale_periods samples faults on that sample, not before."""
     sup = SafetySupervisor(dyn, DT, SafetyParameters(stale_periods=10))

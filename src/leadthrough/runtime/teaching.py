@@ -16,6 +16,7 @@ finalised (complete) either way.
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -56,6 +57,7 @@ class TeachingSession:
         self.recorded = 0
         self.time = 0.0
         self._t0: float | None = None
+        self._last_recorded = -math.inf  # the session time of the latest row recorded [s]
         self._events = 0
 
     def warm_up(self) -> float:
@@ -67,17 +69,26 @@ class TeachingSession:
         return self.controller.step(state)
 
     def after_period(self, state: JointState, command: FloatArray) -> None:
-        """Record the period just sent (unless calibrating) and the supervisor's events."""
+        """Record the period just sent (unless calibrating) and the supervisor's events.
+
+        A sample that does not come after the latest recorded (out of order, or repeated)
+        or that is not one reading per joint is stepped (the supervisor judges it) but not
+        recorded: a recording's rows are the arm's path in time. An out-of-order sample
+        recorded before made the whole session unreplayable ("time not increasing"), and
+        one with a joint too few ended the session on the recorder's error (a review).
+        """
         if self._t0 is None:
             self._t0 = float(state.t)
         self.time = float(state.t) - self._t0
         c = self.controller
-        if not c.calibrating:
-            n = len(state.q)
+        n = c.robot.n_joints
+        readable = np.shape(state.q) == np.shape(state.qd) == (n,)
+        if not c.calibrating and readable and self.time > self._last_recorded:
             tau = np.full(n, np.nan) if state.tau_measured is None else state.tau_measured
             self.recorder.record(self.time, state.q, state.qd, tau, c.tau_ext_hat, c.std, c.mode,
                                  c.state.value, c.tool_wrench, c.enabling)  # fmt: skip
             self.recorded += 1
+            self._last_recorded = self.time
         self.record_events()
 
     def record_events(self) -> None:

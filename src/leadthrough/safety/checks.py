@@ -192,6 +192,42 @@ def reading_problem(
     return None
 
 
+#: A joint's reading may move at most this many times its speed limit between two
+#: samples [–] (a speed above the limit is braked, not impossible), plus :data:`JUMP_FLOOR`.
+JUMP_SPEEDS = 2.0
+#: The least step any reading may take between two samples [rad] (encoders' noise).
+JUMP_FLOOR = 1e-3
+
+
+def jump_problem(
+    position: FloatArray, previous: FloatArray, speed: FloatArray, interval: float
+) -> str | None:
+    """Why ``position`` cannot follow ``previous`` [rad] ``interval`` [s] later, or None.
+
+    A joint whose reading moved more than :data:`JUMP_SPEEDS` times its speed limit
+    ``speed`` [rad/s] allows did not move that way: a reading that wraps around (2π on a
+    joint whose range spans more), a glitch, or samples out of order. Before, such a
+    reading was taken: a YuMi's joint 5 read 2π further on within its range was recorded,
+    and the replay planned a full turn the hand never taught (a review).
+    """
+    joint = _jumped(position, previous, speed, interval, JUMP_SPEEDS, JUMP_FLOOR)
+    if joint < 0:
+        return None
+    step = position[joint] - previous[joint]
+    return (f"joint {joint + 1}'s reading jumped {step:+.3f} rad in {1e3 * interval:.3g} ms, "
+            f"more than {JUMP_SPEEDS:g}× its speed limit allows: a reading that wraps "
+            "around, or samples out of order?")  # fmt: skip
+
+
+@kernel
+def _jumped(position, previous, speed, interval, speeds, floor):  # fmt: skip
+    """The first joint whose step exceeds ``speeds · speed · interval + floor``; -1 if none."""
+    for j in range(position.shape[0]):
+        if abs(position[j] - previous[j]) > speeds * speed[j] * interval + floor:
+            return j
+    return -1
+
+
 def command_problem(tau: FloatArray, n: int) -> str | None:
     """Why a controller's torque command is unusable (shape, non-finite), or None."""
     if tau.shape != (n,):

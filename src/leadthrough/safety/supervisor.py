@@ -47,6 +47,7 @@ from leadthrough.safety.checks import (
     command_problem,
     floats,
     in_range,
+    jump_problem,
     sample_rate_problem,
     sample_reason,
     seconds,
@@ -125,6 +126,7 @@ class SafetySupervisor:
         self.gravity_scale: FloatArray | None = None  # [–]
         self.gravity_offset: FloatArray | None = None  # [Nm]
         self._q_last_good: FloatArray | None = None
+        self._q_checked: FloatArray | None = None  # the latest reading that passed check
         self._in_overrun = False
         p = self.parameters
         self._command_scalars = np.array([p.tool_speed_limit, p.braking_time,
@@ -198,7 +200,7 @@ class SafetySupervisor:
         """
         self.state = SupervisorState.HOLDING
         self.fault_reason = None
-        self._q_last_good = None
+        self._q_last_good = self._q_checked = None
         self._t_checked, self._stalled, self._rate_window = None, 0, None
         self._clear_episodes()
         self._log("reset", "supervisor reset: holding")
@@ -221,6 +223,7 @@ class SafetySupervisor:
             True when the sample is good and no fault is latched.
         """
         position: FloatArray | None = None
+        previous = self._t_checked  # the stamp of the sample checked before this one
         try:
             late = self._time_problem(t)  # and the latest time, if t is a finite number
             position, velocity = floats(q), as_floats(qd)  # q is kept: a copy
@@ -234,10 +237,13 @@ class SafetySupervisor:
                 problem = problem or self._encoders.update(position, velocity, tau)
             else:
                 problem = self._encoders.reason(count)
+            if problem is None and self._q_checked is not None and previous is not None:
+                interval = max(self._t - previous, self.dt)
+                problem = jump_problem(position, self._q_checked, limits.speed, interval)
         except Exception as error:  # nothing may escape on the motor path
             problem, late = failure("sensor check", error), None
         if problem is None:  # a good position is held in a safe stop, whatever its time
-            self._q_last_good = position
+            self._q_last_good = self._q_checked = position
         elif self._q_last_good is None and self._position_sound(position):
             self._q_last_good = position  # nothing held yet: the reading that is sound
         problem = problem or late
