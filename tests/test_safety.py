@@ -10,7 +10,7 @@ import pytest
 
 import leadthrough as lt
 from leadthrough.errors import ParameterError
-from leadthrough.safety.checks import MEASUREMENT_LAG, FrozenEncoders
+from leadthrough.safety.checks import MEASUREMENT_LAG, VELOCITY_MOVE, FrozenEncoders
 from leadthrough.safety.supervisor import SafetyParameters, SafetySupervisor, SupervisorState
 from realdata import REALDATA, needs_realdata
 
@@ -122,6 +122,38 @@ def test_steps_a_joint_can_take_are_no_jump(sup):
     q = q - ROBOT.velocity_limits * 0.24
     assert sup.check(DT + 0.24, q, np.zeros(N))
     assert sup.state is SupervisorState.HOLDING
+
+
+def test_velocities_of_the_other_sign_are_a_fault_once_a_joint_has_moved(sup):
+    """Joint 2 moving at 0.5 rad/s, its velocity read with the other sign: a fault naming it.
+
+    Before, nothing compared the velocity with the position's change (a review).
+    """
+    q, qd = MID.copy(), np.zeros(N)
+    qd[1] = 0.5  # [rad/s]
+    for k in range(60):  # 0.12 rad in 0.24 s
+        if not sup.check(k * DT, q + qd * k * DT, -qd):
+            break
+    assert sup.fault_reason.startswith("joint 2's velocity reading integrates to -1×")
+    assert VELOCITY_MOVE <= k * DT * 0.5 < VELOCITY_MOVE + 0.01  # [rad]: once it has moved
+
+
+def test_velocities_that_lag_their_position_are_no_fault(sup):
+    """A velocity 50 ms late on a 1.5 rad/s sinusoid: its integral lags, within the ratio."""
+    t = np.arange(500) * DT
+    for k, time in enumerate(t):
+        q, qd = MID.copy(), np.zeros(N)
+        q[0] += 0.3 * np.sin(5.0 * time)
+        qd[0] = 1.5 * np.cos(5.0 * (time - 0.05))
+        assert sup.check(time, q, qd), (k, sup.fault_reason)
+
+
+def test_degrees_for_radians_are_named(sup):
+    """A velocity in degrees per second beyond the range: the fault says degrees."""
+    qd = np.zeros(N)
+    qd[2] = np.rad2deg(4.0)  # 4 rad/s in degrees per second
+    assert not sup.check(0.0, MID, qd)
+    assert sup.fault_reason.endswith("(in degrees? converted, every joint's reading fits)")
 
 
 def test_frozen_encoder_faults_after_exactly_stale_periods(dyn):

@@ -187,16 +187,28 @@ def reading_problem(
         i = bad[0]
         return (
             f"joint {i + 1} {kind} reading {value[i]:.4g} {unit} "
-            f"outside [{low[i]:.4g}, {high[i]:.4g}] {unit}"
+            f"outside [{low[i]:.4g}, {high[i]:.4g}] {unit}{_in_degrees(value, low, high, unit)}"
         )
     return None
+
+
+def _in_degrees(value: FloatArray, low: FloatArray, high: FloatArray, unit: str) -> str:
+    """A hint when every reading in radians would be in range: degrees given for radians."""
+    if not unit.startswith("rad"):
+        return ""
+    radians = np.deg2rad(value)
+    if np.all((radians >= low) & (radians <= high)):
+        return " (in degrees? converted, every joint's reading fits)"
+    return ""
 
 
 #: A joint's reading may move at most this many times its speed limit between two
 #: samples [–] (a speed above the limit is braked, not impossible), plus :data:`JUMP_FLOOR`.
 JUMP_SPEEDS = 2.0
-#: The least step any reading may take between two samples [rad] (encoders' noise).
-JUMP_FLOOR = 1e-3
+#: The least step any reading may take between two samples [rad]: stamps off their
+#: sample's time (the public Panda log has a joint 7 mrad on in a 1.01 ms stamp, 3× its
+#: speed limit) and encoders' noise; a wrap-around is 2π.
+JUMP_FLOOR = 0.05
 
 
 def jump_problem(
@@ -225,6 +237,73 @@ def _jumped(position, previous, speed, interval, speeds, floor):  # fmt: skip
     for j in range(position.shape[0]):
         if abs(position[j] - previous[j]) > speeds * speed[j] * interval + floor:
             return j
+    return -1
+
+
+#: A velocity check window closes once a joint has moved this far from its start [rad].
+VELOCITY_MOVE = 0.1
+#: ... or after this long without [s] (its integral restarts).
+VELOCITY_WINDOW = 1.0
+#: Velocity readings whose integral over a window is this many times the position's change,
+#: or this much of it the other way, are not the position's rate [–]. Far apart: a filtered
+#: velocity lags its position (up to ±50 % of a 0.1 rad move at 1.5 rad/s with 50 ms of lag).
+VELOCITY_RATIO = (-0.5, 10.0)
+
+
+class VelocityUnits:
+    """Whether each joint's velocity reading is its position's rate, judged on its moves.
+
+    Over a window that closes when the joint has moved :data:`VELOCITY_MOVE` from where
+    it started, the integral of the velocity read must match the position's change within
+    :data:`VELOCITY_RATIO`: a velocity in degrees per second reads 57× it, one of the other
+    sign −1×. Before, degrees per second were caught only beyond twice the speed limit, and
+    a Panda with a calibration went 2.9 rad to its joint limit at full torque on them, a
+    reading of the other sign not at all (a review).
+
+    Args:
+        n: Number of joints.
+    """
+
+    def __init__(self, n: int) -> None:
+        self._windows = np.full((3, n), np.nan)  # rows: start [rad], integral [rad], time [s]
+
+    def clear(self) -> None:
+        """Forget the windows (a reset: the next sample starts them)."""
+        self._windows[:] = np.nan
+
+    def update(self, q: FloatArray, qd: FloatArray, interval: float) -> str | None:
+        """Take a sample ``interval`` [s] after the one before; why it is off, or None."""
+        low, high = VELOCITY_RATIO
+        joint = _velocity_off(self._windows, q, qd, interval, VELOCITY_MOVE, VELOCITY_WINDOW,
+                              low, high)  # fmt: skip
+        if joint < 0:
+            return None
+        ratio = self._windows[1, joint]  # the kernel leaves the judged window's ratio there
+        self.clear()
+        return (f"joint {joint + 1}'s velocity reading integrates to {ratio:+.3g}× its "
+                "position's change: not in rad/s (degrees per second?), or of the other "
+                "sign")  # fmt: skip
+
+
+@kernel
+def _velocity_off(windows, q, qd, interval, move, longest, low, high):  # fmt: skip
+    """One sample of :class:`VelocityUnits`, windows in place; the first joint off, or -1.
+
+    A joint off leaves its ratio in ``windows[1]``.
+    """
+    for j in range(q.shape[0]):
+        if not math.isfinite(windows[0, j]) or windows[2, j] > longest:
+            windows[0, j], windows[1, j], windows[2, j] = q[j], 0.0, 0.0
+            continue
+        windows[1, j] += qd[j] * interval
+        windows[2, j] += interval
+        moved = q[j] - windows[0, j]
+        if abs(moved) >= move:
+            ratio = windows[1, j] / moved
+            if ratio < low or ratio > high:
+                windows[1, j] = ratio
+                return j
+            windows[0, j], windows[1, j], windows[2, j] = q[j], 0.0, 0.0
     return -1
 
 

@@ -42,6 +42,7 @@ from leadthrough.safety.checks import (
     OUT_OF_RANGE,
     RATE_WINDOW,
     FrozenEncoders,
+    VelocityUnits,
     as_floats,
     clock_stopped,
     command_problem,
@@ -127,6 +128,7 @@ class SafetySupervisor:
         self.gravity_offset: FloatArray | None = None  # [Nm]
         self._q_last_good: FloatArray | None = None
         self._q_checked: FloatArray | None = None  # the latest reading that passed check
+        self._velocity_units = VelocityUnits(dynamics.n)
         self._in_overrun = False
         p = self.parameters
         self._command_scalars = np.array([p.tool_speed_limit, p.braking_time,
@@ -201,6 +203,7 @@ class SafetySupervisor:
         self.state = SupervisorState.HOLDING
         self.fault_reason = None
         self._q_last_good = self._q_checked = None
+        self._velocity_units.clear()
         self._t_checked, self._stalled, self._rate_window = None, 0, None
         self._clear_episodes()
         self._log("reset", "supervisor reset: holding")
@@ -240,6 +243,7 @@ class SafetySupervisor:
             if problem is None and self._q_checked is not None and previous is not None:
                 interval = max(self._t - previous, self.dt)
                 problem = jump_problem(position, self._q_checked, limits.speed, interval)
+                problem = problem or self._velocity_units.update(position, velocity, interval)
         except Exception as error:  # nothing may escape on the motor path
             problem, late = failure("sensor check", error), None
         if problem is None:  # a good position is held in a safe stop, whatever its time
