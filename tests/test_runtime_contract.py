@@ -694,6 +694,30 @@ def test_a_measured_torque_of_the_other_sign_is_a_fault(calibrate):
     assert np.abs(twin.truth.q - start).max() < 0.2  # [rad]
 
 
+@pytest.mark.parametrize("robot", ["yumi", "panda"])
+def test_velocities_in_degrees_per_second_fault_and_the_stop_damps_on_the_positions(robot):
+    """A driver reporting degrees per second, nobody at the arm, calibrating: it stays put.
+
+    A fault naming degrees within 0.1 s, and the safe stop damps on the positions' rate:
+    the arm moves less than 20 mrad. Before, the stop damped on the readings (57× too
+    strong) and drove a Panda 2.9 rad to its joint limit at full torque (a review).
+    """
+    arm = getattr(lt.robots, robot)()
+
+    class Degrees(ShiftedClock):
+        def read_state(self) -> JointState:
+            state = self.twin.read_state()
+            return JointState(state.t, state.q, np.rad2deg(state.qd), state.tau_measured)
+
+    twin = DigitalTwin(arm)
+    start = twin.truth.q.copy()
+    controller = lt.LeadThrough(arm, "active", calibrate=True)
+    lt.control_loop(Degrees(twin, 0.0), controller, duration=1.5, wall_clock=False)
+    (fault,) = [e for e in controller.supervisor.events if e.kind == "fault"]
+    assert fault.t < 0.1 and "in degrees?" in fault.detail, fault
+    assert np.abs(twin.truth.q - start).max() < 0.02  # [rad]
+
+
 def test_a_first_sample_with_a_bad_torque_holds_the_arm_where_it_reads():
     """A first sample whose position is sound but whose torque is NaN: the gravity hold there.
 
