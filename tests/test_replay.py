@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -182,6 +184,23 @@ def test_the_plan_leaves_the_tracking_a_share_of_the_limits(dyn):
     assert np.max(np.abs(plan.qd) / ROBOT.velocity_limits) <= 0.85
     with pytest.raises(ReplayError):
         plan_replay(t, q, dyn, parameters=ReplayParameters(time_scale=at_the_limit))
+
+
+def test_a_pose_gravity_alone_cannot_hold_says_no_time_scale_helps():
+    """An arm whose shoulder's gravity at the taught pose is beyond 85 % of its limit.
+
+    Before, the refusal said "not even 20 times slower passes", as if slower could help
+    (a review: Talos' arm at its assumed home).
+    """
+    weak = dataclasses.replace(ROBOT, joints=tuple(
+        dataclasses.replace(joint, torque_limit=1.0) if i == 1 else joint
+        for i, joint in enumerate(ROBOT.joints)))  # fmt: skip
+    dynamics = lt.Dynamics(weak)
+    assert abs(dynamics.gravity(HOME)[1]) > 0.85  # [Nm]: the shoulder holds more at home
+    t, q = taught_path()
+    with pytest.raises(ReplayError, match=r"against gravity alone takes joint 2 .* Nm: no time "
+                       r"scale helps$"):  # fmt: skip
+        plan_replay(t, q, dynamics)
 
 
 @pytest.mark.parametrize("share", [0.0, -0.5, 1.2, np.nan])

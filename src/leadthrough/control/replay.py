@@ -314,6 +314,11 @@ def _check_limits(plan: ReplayPlan, robot: RobotDescription, friction: FrictionM
                 break
         advice = ("not even 20 times slower passes" if needed is None
                   else f"replay slower, time_scale >= {needed:.3g}")  # fmt: skip
+        if needed is None and np.any(np.abs(gravity) > torque):  # holding alone is too much
+            at, joint = np.argwhere(np.abs(gravity) > torque)[0]
+            advice = (f"holding the pose of t = {plan.t[at]:.3f} s against gravity alone takes "
+                      f"joint {joint + 1} {abs(gravity[at, joint]):.4g} Nm: no time scale "
+                      "helps")  # fmt: skip
         raise ReplayError(f"{reason}: {advice}", int(j) + 1, needed)
 
 
