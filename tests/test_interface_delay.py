@@ -213,6 +213,14 @@ def test_periods_without_a_measured_torque_leave_the_delay():
     assert set(delays) == {3}
 
 
+def _interpreted_score(estimate: InterfaceDelay, tau: np.ndarray) -> int:
+    """The delay from :func:`interface_delay._score`'s Python twin, on ``estimate``'s state."""
+    return interface_delay._score.py_func(
+        estimate._changes, estimate._commands, estimate._scores, estimate._previous, tau,
+        estimate._sent, estimate._rate, estimate.delay,
+    )  # fmt: skip
+
+
 def test_the_compiled_step_is_its_python_arithmetic():
     """The kernel and its Python twin, fed the same drive, keep the same scores."""
     rng = np.random.default_rng(2)
@@ -221,10 +229,7 @@ def test_the_compiled_step_is_its_python_arithmetic():
     compiled, interpreted = InterfaceDelay(N, 2, DT), InterfaceDelay(N, 2, DT)
     for command, tau in zip(commands, measured, strict=True):
         compiled.update(tau)
-        interpreted.delay = interface_delay._score.py_func(
-            interpreted._changes, interpreted._commands, interpreted._scores,
-            interpreted._previous, tau, interpreted._sent, interpreted._rate, interpreted.delay,
-        )  # fmt: skip
+        interpreted.delay = _interpreted_score(interpreted, tau)
         compiled.record(command)
         interpreted.record(command)
         assert compiled.delay == interpreted.delay
@@ -290,10 +295,7 @@ def test_the_compiled_gain_is_its_python_arithmetic():
     compiled, interpreted = InterfaceDelay(N, 2, DT), InterfaceDelay(N, 2, DT)
     for command, tau in zip(commands, measured, strict=True):
         compiled.update(tau)
-        interpreted.delay = interface_delay._score.py_func(
-            interpreted._changes, interpreted._commands, interpreted._scores,
-            interpreted._previous, tau, interpreted._sent, interpreted._rate, interpreted.delay,
-        )  # fmt: skip
+        interpreted.delay = _interpreted_score(interpreted, tau)
         joint = interface_delay._fit.py_func(
             interpreted._moments, interpreted._commands, tau, interpreted._sent,
             interpreted._rate, interpreted.delay, interpreted._judged, interpreted._floor,

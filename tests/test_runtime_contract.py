@@ -680,18 +680,12 @@ def test_a_measured_torque_of_the_other_sign_is_a_fault(calibrate):
     went on with the same readings (a review).
     """
 
-    class OtherSign(ShiftedClock):
-        def read_state(self) -> JointState:
-            state = self.twin.read_state()
-            return JointState(state.t, state.q, state.qd, -state.tau_measured)
+    def other_sign(state: JointState) -> JointState:
+        return JointState(state.t, state.q, state.qd, -state.tau_measured)
 
-    twin = DigitalTwin(ROBOT)
-    start = twin.truth.q.copy()
-    controller = lt.LeadThrough(ROBOT, "active", calibrate=calibrate)
-    lt.control_loop(OtherSign(twin, 0.0), controller, duration=2.0, wall_clock=False)
-    (fault,) = [e for e in controller.supervisor.events if e.kind == "fault"]
+    fault, moved = _untouched(ROBOT, other_sign, calibrate, duration=2.0)
     assert fault.t < 0.5 and "the other sign convention" in fault.detail, fault
-    assert np.abs(twin.truth.q - start).max() < 0.2  # [rad]
+    assert moved < 0.2  # [rad]
 
 
 @pytest.mark.parametrize("robot", ["yumi", "panda"])
@@ -702,20 +696,31 @@ def test_velocities_in_degrees_per_second_fault_and_the_stop_damps_on_the_positi
     the arm moves less than 20 mrad. Before, the stop damped on the readings (57× too
     strong) and drove a Panda 2.9 rad to its joint limit at full torque (a review).
     """
-    arm = getattr(lt.robots, robot)()
 
-    class Degrees(ShiftedClock):
+    def degrees(state: JointState) -> JointState:
+        return JointState(state.t, state.q, np.rad2deg(state.qd), state.tau_measured)
+
+    fault, moved = _untouched(getattr(lt.robots, robot)(), degrees, True, duration=1.5)
+    assert fault.t < 0.1 and "in degrees?" in fault.detail, fault
+    assert moved < 0.02  # [rad]
+
+
+def _untouched(arm, reading, calibrate: bool, duration: float):
+    """Active mode on the twin, nobody at the arm, each sample passed through ``reading``.
+
+    Returns the supervisor's fault event and how far the arm moved [rad].
+    """
+
+    class Misreading(ShiftedClock):
         def read_state(self) -> JointState:
-            state = self.twin.read_state()
-            return JointState(state.t, state.q, np.rad2deg(state.qd), state.tau_measured)
+            return reading(self.twin.read_state())
 
     twin = DigitalTwin(arm)
     start = twin.truth.q.copy()
-    controller = lt.LeadThrough(arm, "active", calibrate=True)
-    lt.control_loop(Degrees(twin, 0.0), controller, duration=1.5, wall_clock=False)
+    controller = lt.LeadThrough(arm, "active", calibrate=calibrate)
+    lt.control_loop(Misreading(twin, 0.0), controller, duration=duration, wall_clock=False)
     (fault,) = [e for e in controller.supervisor.events if e.kind == "fault"]
-    assert fault.t < 0.1 and "in degrees?" in fault.detail, fault
-    assert np.abs(twin.truth.q - start).max() < 0.02  # [rad]
+    return fault, float(np.abs(twin.truth.q - start).max())
 
 
 def test_a_first_sample_with_a_bad_torque_holds_the_arm_where_it_reads():
