@@ -399,7 +399,6 @@ class LeadThrough:
         self._calibration_start = 0.0  # [s], the tick of the calibration's first sample
         # the samples' ticks (a driver's stamps may jitter, and lose samples)
         self._ticks = TickClock(self.dt)
-        self._tick = math.nan  # the latest sample's tick [s] (none yet)
         self._periods = 1  # control periods since the sample before (more: samples lost)
         self._calibrating = self.calibrate  # the supervisor stays in TEACHING
 
@@ -507,7 +506,10 @@ class LeadThrough:
             zeros = np.zeros(self.robot.n_joints)
             return self._send(supervisor.command(stamp, q, qd, zeros), zeros)
         t = self._t  # the stamp, checked: a finite number of seconds
-        self._count_periods(t)
+        # the periods since the sample before, on the robot's ticks (more: samples lost;
+        # the observer predicts over all of them: over one, a 100 ms gap mid-push read the
+        # momentum it built as a push, tests/test_observer.py)
+        self._periods = self._ticks.advance(t)
         try:
             self._stage = "model"
             self.model = model = self.dynamics.snapshot(q, qd)
@@ -527,19 +529,6 @@ class LeadThrough:
             zeros = np.zeros(self.robot.n_joints)
             command, dither = supervisor.command(t, q, qd, zeros), zeros
         return self._send(command, dither)
-
-    def _count_periods(self, t: float) -> None:
-        """The sample's tick, and the control periods since the sample before (:attr:`_periods`).
-
-        More than one where samples were lost: the drive held its command over all of
-        them, and the observer predicts over all of them. It predicted over one, and read
-        the momentum a 100 ms gap mid-push had built as a push 6.6 Nm off the hand's for
-        50 ms, ringing 2.5 Nm the other way (a YuMi on the twin).
-        """
-        tick = self._ticks(t)
-        if not math.isnan(self._tick):
-            self._periods = max(1, round((tick - self._tick) / self.dt))
-        self._tick = tick
 
     def _sample(
         self, state: JointState | ArrayLike, qd: ArrayLike | None, tau: ArrayLike | None
@@ -622,9 +611,9 @@ class LeadThrough:
                                                    self.calibration_parameters,
                                                    self.parameters.gravity_uncertainty,
                                                    self.dt, self._calibration_damping)  # fmt: skip
-            self._calibration_start = self._tick
+            self._calibration_start = self._ticks.tick
         # the time on the robot's ticks: a stamp's jitter is not the arm's (TickClock)
-        run, elapsed = self._calibration_run, self._tick - self._calibration_start
+        run, elapsed = self._calibration_run, self._ticks.tick - self._calibration_start
         applied, _ = self._measured(tau_measured)
         # what the drive measured against what it was told (once a command has reached it)
         told = elapsed >= self._sent.delay * self.dt

@@ -130,8 +130,11 @@ class SafetySupervisor:
         self._q_last_good: FloatArray | None = None
         self._q_checked: FloatArray | None = None  # the latest reading that passed check
         self._velocity_units = VelocityUnits(dynamics.n)
-        self._q_sound: FloatArray | None = None  # the latest sound position [rad]
-        self._position_rate = np.zeros(dynamics.n)  # its rate since the one before [rad/s]
+        # the latest two sound positions [rad] and the time between them [s] (their rate
+        # is the safe stop's velocity once the velocity readings are untrusted)
+        self._q_sound: FloatArray | None = None
+        self._q_sound_before: FloatArray | None = None
+        self._sound_interval = self.dt
         self._velocity_untrusted = False  # a velocity reading was out of range or unit
         self._in_overrun = False
         p = self.parameters
@@ -206,9 +209,8 @@ class SafetySupervisor:
         """
         self.state = SupervisorState.HOLDING
         self.fault_reason = None
-        self._q_last_good = self._q_checked = self._q_sound = None
+        self._q_last_good = self._q_checked = self._q_sound = self._q_sound_before = None
         self._velocity_units.clear()
-        self._position_rate[:] = 0.0
         self._velocity_untrusted = False
         self._t_checked, self._stalled, self._rate_window = None, 0, None
         self._clear_episodes()
@@ -252,7 +254,7 @@ class SafetySupervisor:
                 units = self._velocity_units.update(position, velocity, interval)
                 self._velocity_untrusted |= units is not None
                 problem = problem or units
-            self._follow_position(position, velocity, previous)
+            self._follow_position(position, velocity, previous, problem is None)
         except Exception as error:  # nothing may escape on the motor path
             problem, late = failure("sensor check", error), None
         if problem is None:  # a good position is held in a safe stop, whatever its time
@@ -266,29 +268,35 @@ class SafetySupervisor:
         return self.state is not SupervisorState.FAULT
 
     def _follow_position(
-        self, position: FloatArray, velocity: FloatArray, previous: float | None
+        self, position: FloatArray, velocity: FloatArray, previous: float | None, sound: bool
     ) -> None:
-        """The positions' own rate [rad/s], and whether the velocity readings are trusted.
+        """Keep the latest sound positions; note velocity readings that cannot be trusted.
 
         Kept from every sound position, whatever the velocity read with it: a safe stop
         whose velocity readings are the fault (finite and out of range, or not the
-        positions' rate)
-        damps on the positions' rate instead (:meth:`_safe_stop`). Damped on velocities in
-        degrees per second, 57× too strong, a Panda's safe stop drove it 2.9 rad to its
-        joint limit at full torque (a review).
+        positions' rate) damps on the positions' rate instead (:meth:`_safe_stop`). Damped
+        on velocities in degrees per second, 57× too strong, a Panda's safe stop drove it
+        2.9 rad to its joint limit at full torque (a review). ``sound``: the sample passed
+        every check (its position is sound, its velocity in range).
         """
-        if not self._position_sound(position):
+        if not (sound or self._position_sound(position)):
             return
-        if self._q_sound is not None and previous is not None:
-            interval = max(self._t - previous, self.dt)
-            np.subtract(position, self._q_sound, out=self._position_rate)
-            self._position_rate /= interval
-        self._q_sound = position
+        if previous is not None:
+            self._sound_interval = max(self._t - previous, self.dt)
+        self._q_sound_before, self._q_sound = self._q_sound, position
+        if sound:
+            return
         low, high = self._limits.sample_low, self._limits.sample_high
         if velocity.shape != position.shape:
             self._velocity_untrusted = True
         elif not within_bounds(velocity, low, high, self.n) and np.isfinite(velocity).all():
             self._velocity_untrusted = True  # a number out of range: the unit (a NaN: a glitch)
+
+    def _position_rate(self) -> FloatArray:
+        """The latest two sound positions' rate [rad/s] (0 before there are two)."""
+        if self._q_sound is None or self._q_sound_before is None:
+            return np.zeros(self.n)
+        return (self._q_sound - self._q_sound_before) / self._sound_interval
 
     def _position_sound(self, position: FloatArray | None) -> bool:
         """Whether ``position`` [rad] is one finite reading per joint within its range.
@@ -483,7 +491,7 @@ class SafetySupervisor:
             frozen = self._encoders.frozen()
             velocity = trusted_velocity(qd, self._limits.qd_bound, frozen) if damped else None
             if damped and self._velocity_untrusted:  # the readings are the fault: positions
-                velocity = self._position_rate.copy()
+                velocity = self._position_rate()
             q = self._q_last_good
             gravity = self.dynamics.gravity(q)
             if self.gravity_scale is not None and self.gravity_offset is not None:
