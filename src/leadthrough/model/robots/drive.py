@@ -68,6 +68,8 @@ ASSUMED_SLOPE, ASSUMED_HALF_WIDTH, ASSUMED_NOISE_FRACTION = 5e3, 2e-3, 0.05
 #: The zero reading is home for a joint if it is this fraction of the range inside.
 HOME_MARGIN = 0.1
 
+#: A home where gravity takes more than this share of a joint's torque limit is named [–].
+HEAVY_HOME = 0.8
 #: A home where the tool Jacobian's smallest singular value over its largest is below this
 #: is near a singularity, when it is not elsewhere in the limits [–]: there a hand's push
 #: along the weak direction barely moves the arm.
@@ -166,8 +168,9 @@ def complete_drive_data(
 
     Warns:
         AssumedDriveDataWarning: Once, naming every quantity assumed (by this function
-            or by the drive data file's ``assumed`` list) and the assumed values, and a
-            home near a singularity (:data:`SINGULAR_HOME`).
+            or by the drive data file's ``assumed`` list) and the assumed values, a
+            home near a singularity (:data:`SINGULAR_HOME`), and one where gravity takes
+            most of a joint's torque limit (:data:`HEAVY_HOME`).
     """
     assumed_by_file: list[str] = []
     data: dict[str, Any] = {}
@@ -186,7 +189,7 @@ def complete_drive_data(
     if assumed_by_file:
         notes.append(f"{', '.join(assumed_by_file)} (stated in {Path(str(drive_data)).name})")
     parts = ["drive data assumed (no public numbers): " + "; ".join(notes)] if notes else []
-    parts += _singular_home(robot)
+    parts += _singular_home(robot) + _heavy_home(robot)
     if parts:
         warnings.warn(f"{robot.name}: " + "; ".join(parts), AssumedDriveDataWarning, stacklevel=3)
     return robot
@@ -254,6 +257,25 @@ def _assume(
         home = _assumed_home(robot.q_min, robot.q_max)
         notes.append(f"home {_values(home)} rad")
     return dataclasses.replace(robot, joints=tuple(joints), home_position=home), notes
+
+
+def _heavy_home(robot: RobotDescription) -> list[str]:
+    """A note if gravity at home takes more than :data:`HEAVY_HOME` of a joint's torque limit.
+
+    There the drives have little left for the operator's assist, the tracking and the safe
+    stop: Talos' arm from example-robot-data holds 89 % of its first joint's limit at its
+    assumed home, and sank 0.26–1.12 rad with nobody touching it on 4 of 16 plants (a
+    review), with no word at load.
+    """
+    from leadthrough.model.dynamics import Dynamics  # the model's gravity (Pinocchio)
+
+    share = np.abs(Dynamics(robot).gravity(robot.home())) / robot.torque_limits
+    joint = int(np.argmax(share))
+    if share[joint] <= HEAVY_HOME:
+        return []
+    return [f"at home joint {joint + 1} holds {share[joint]:.0%} of its torque limit against "
+            "gravity: little is left to guide and stop the arm (a home where the arm hangs "
+            "lower, or the drives' real limits, in the drive data)"]  # fmt: skip
 
 
 def _singular_home(robot: RobotDescription) -> list[str]:
