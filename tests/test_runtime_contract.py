@@ -701,7 +701,7 @@ def test_velocities_in_degrees_per_second_fault_and_the_stop_damps_on_the_positi
         return JointState(state.t, state.q, np.rad2deg(state.qd), state.tau_measured)
 
     fault, moved = _untouched(getattr(lt.robots, robot)(), degrees, True, duration=1.5)
-    assert fault.t < 0.1 and "in degrees?" in fault.detail, fault
+    assert fault.t < 0.1 and "in degrees per second?" in fault.detail, fault
     assert moved < 0.02  # [rad]
 
 

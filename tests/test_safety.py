@@ -153,7 +153,27 @@ def test_degrees_for_radians_are_named(sup):
     qd = np.zeros(N)
     qd[2] = np.rad2deg(4.0)  # 4 rad/s in degrees per second
     assert not sup.check(0.0, MID, qd)
-    assert sup.fault_reason.endswith("(in degrees? converted, every joint's reading fits)")
+    hint = "(in degrees per second? converted, every joint's reading fits)"
+    assert sup.fault_reason.endswith(hint)
+
+
+def test_the_safe_stop_holds_the_sound_joints_where_they_read(sup, dyn):
+    """Joint 1 reads 2π off (out of range) while a hand moves joint 2: the hold follows joint 2.
+
+    Before, the whole pose of the last good sample was held: a Panda pulled on after such a
+    fault fell 2.3 rad at up to 17 rad/s under a gravity hold for a pose it had left.
+    """
+    q = MID.copy()
+    assert sup.check(0.0, q, np.zeros(N))
+    moved = q.copy()
+    moved[1] += 0.4  # the shoulder, pulled on
+    wrapped = moved.copy()
+    wrapped[0] += 2.0 * np.pi  # beyond its range
+    assert not sup.check(DT, wrapped, np.zeros(N))
+    periods = round(sup.parameters.safe_stop_damping_time / DT)
+    stop = [sup.command(DT * (2 + k), wrapped, np.zeros(N), np.zeros(N))
+            for k in range(periods + 1)]  # fmt: skip
+    np.testing.assert_allclose(stop[-1], dyn.gravity(moved), atol=1e-9)
 
 
 def test_frozen_encoder_faults_after_exactly_stale_periods(dyn):

@@ -193,12 +193,15 @@ def reading_problem(
 
 
 def _in_degrees(value: FloatArray, low: FloatArray, high: FloatArray, unit: str) -> str:
-    """A hint when every reading in radians would be in range: degrees given for radians."""
-    if not unit.startswith("rad"):
+    """A hint for velocities when every one would fit in rad/s: degrees per second?
+
+    Not for positions: a position 2π off (a wrap) fits once divided by 57 as well.
+    """
+    if unit != "rad/s":
         return ""
     radians = np.deg2rad(value)
     if np.all((radians >= low) & (radians <= high)):
-        return " (in degrees? converted, every joint's reading fits)"
+        return " (in degrees per second? converted, every joint's reading fits)"
     return ""
 
 

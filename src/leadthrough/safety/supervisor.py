@@ -261,6 +261,8 @@ class SafetySupervisor:
             self._q_last_good = self._q_checked = position
         elif self._q_last_good is None and self._position_sound(position):
             self._q_last_good = position  # nothing held yet: the reading that is sound
+        elif self._q_last_good is not None and position is not None:
+            self._hold_sound_joints(position)
         problem = problem or late
         if problem is not None:
             self._fault(problem)
@@ -297,6 +299,22 @@ class SafetySupervisor:
         if self._q_sound is None or self._q_sound_before is None:
             return np.zeros(self.n)
         return (self._q_sound - self._q_sound_before) / self._sound_interval
+
+    def _hold_sound_joints(self, position: FloatArray) -> None:
+        """Hold each joint whose reading is a finite number within its range where it reads.
+
+        A bad sample (a joint's reading wrapped, a velocity in another unit) leaves the
+        other joints' positions sound: the safe stop's gravity follows them. Held where the
+        whole sample was last good, a Panda that a hand kept pulling after its joint 1 read
+        2π off fell 2.3 rad at up to 17 rad/s, its hold's gravity a pose it had left (a
+        review). A wrapped joint's 2π changes no gravity torque.
+        """
+        held = self._q_last_good
+        if held is None or position.shape != held.shape:
+            return
+        limits = self._limits
+        sound = np.isfinite(position) & (position >= limits.q_low) & (position <= limits.q_high)
+        self._q_last_good = np.where(sound, position, held)
 
     def _position_sound(self, position: FloatArray | None) -> bool:
         """Whether ``position`` [rad] is one finite reading per joint within its range.
