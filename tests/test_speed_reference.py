@@ -48,7 +48,9 @@ idle twin's outputs moved by 2e-9), then each joint's confidence in its gravity 
 only as fast as it slides with nobody guiding, not at rest (``ModelErrorBias.update``: the
 active cases without an accepted calibration moved), then the joints' estimates read as a
 force at the tool or a push elsewhere, weighed by their evidence (``tool_force``, the
-mixture). A faster step must reproduce them.
+mixture), then the safe stop holding each joint whose reading is sound where it reads
+(``SafetySupervisor._hold_sound_joints``: the sensor fault's case moved for the period of its
+bad sample). A faster step must reproduce them.
 
 Regenerate the file only for a deliberate change of behaviour (e.g. a redesigned active
 mode), never to make a speed change pass::
