@@ -8,6 +8,7 @@ import pytest
 import leadthrough as lt
 from leadthrough.control.parameters import LeadThroughParameters
 from leadthrough.errors import ParameterError
+from leadthrough.runtime.loop import STRANDED
 from leadthrough.safety.supervisor import SupervisorState
 from leadthrough.twin.operator import During, Hand
 from leadthrough.twin.paths import Line
@@ -237,6 +238,26 @@ def test_a_close_that_raises_does_not_hide_the_error_that_ended_the_loop():
     assert twin.closed
     (failed,) = [e.detail for e in ctl.supervisor.events if e.kind == "close_failed"]
     assert failed == "the robot's close raised OSError: Bad file descriptor"
+
+
+class JointTooFew(ClosableTwin):
+    """A driver that reports one joint too few, from its first sample."""
+
+    def read_state(self) -> lt.JointState:
+        """The twin's sample without its last joint."""
+        state = super().read_state()
+        return lt.JointState(state.t, state.q[:-1], state.qd[:-1], state.tau_measured[:-1])
+
+
+def test_a_fault_with_nothing_to_hold_closes_the_robot():
+    """Samples a joint too few from the first: no position to hold, the robot closed at once.
+
+    Before, the loop sent zero torque for its whole duration (a Panda fell 3 rad; a review).
+    """
+    twin, ctl = JointTooFew(ROBOT), controller()
+    report = lt.control_loop(twin, ctl, duration=1.0, wall_clock=False)
+    assert report.ended == STRANDED and report.periods == 1
+    assert twin.closed and ctl.state is SupervisorState.FAULT
 
 
 @pytest.mark.parametrize(("name", "value"), [("duration", -1.0), ("stop_time", float("nan"))])

@@ -82,8 +82,8 @@ class LoopReport:
         compute_median: Median compute time of one period [s].
         compute_max: Longest compute time of one period [s].
         period: The control period [s].
-        ended: ``"finished"`` (duration reached), ``"stopped"`` (``until`` said so) or
-            what interrupted the loop.
+        ended: ``"finished"`` (duration reached), ``"stopped"`` (``until`` said so),
+            :data:`STRANDED` (the robot closed), or what interrupted the loop.
         warm_up: Time the controller's ``warm_up`` took before the first sample [s].
     """
 
@@ -180,6 +180,11 @@ def control_loop(
             # next tick): a recorder's flush after the command delays the next sample
             if wall_clock and supervisor is not None:
                 supervisor.record_cycle(state.t, elapsed + time.perf_counter() - start)
+            if supervisor is not None and supervisor.stranded:  # nothing to hold it with
+                ended = STRANDED
+                supervisor.log("closed", STRANDED)
+                _close(robot, supervisor)
+                break
             state = robot.read_state()
     except BaseException as error:  # Ctrl-C included: the safe stop comes first
         ended = _interruption(error)
@@ -190,7 +195,7 @@ def control_loop(
         if not isinstance(error, KeyboardInterrupt):
             raise
     else:
-        if hold_at_end and supervisor is not None:
+        if hold_at_end and supervisor is not None and ended != STRANDED:
             _safe_stop(robot, supervisor, f"the loop ended ({ended}): arm held", stop_time, t,
                        close=False)  # fmt: skip
     times = np.frombuffer(compute, dtype=float) if compute else np.zeros(1)
@@ -228,6 +233,11 @@ def stepper(controller: Any) -> Callable[[JointState], FloatArray]:
 
 #: :attr:`LoopReport.ended` when the operator pressed Ctrl-C.
 OPERATOR_STOP = "interrupted by the operator (Ctrl-C)"
+#: :attr:`LoopReport.ended` when a fault left no position to hold the arm at (the samples
+#: never had a sound position: a joint too few from the first): the robot is closed, its
+#: brakes on. Before, the loop sent zero torque for its whole duration and a Panda whose
+#: driver reported 6 joints fell 3 rad (a review).
+STRANDED = "a fault with no position ever read to hold the arm at: the robot was closed"
 
 
 def _interruption(error: BaseException) -> str:

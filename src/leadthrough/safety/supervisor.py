@@ -148,6 +148,15 @@ class SafetySupervisor:
         """Log of what happened, one entry per episode (not per period)."""
         return self._log_book.events
 
+    @property
+    def stranded(self) -> bool:
+        """A fault is latched and no sound position was ever read: nothing to hold the arm at.
+
+        The safe stop then sends zero torque; the robot's brakes are all that can hold it
+        (``control_loop`` closes the robot).
+        """
+        return self.state is SupervisorState.FAULT and self._q_last_good is None
+
     def use_model(self, dynamics: Dynamics) -> None:
         """Supervise with the model ``dynamics`` from now on (e.g. after a payload).
 
