@@ -8,12 +8,13 @@ import numpy as np
 from leadthrough.control import active_law, admittance, dither, feedforward
 from leadthrough.control.active_law import ActiveLaw
 from leadthrough.control.bias import ModelErrorBias
-from leadthrough.control.calibration import CalibrationParameters, CalibrationRun, TickClock
+from leadthrough.control.calibration import CalibrationParameters, CalibrationRun
 from leadthrough.control.calibration import run as calibration_run
 from leadthrough.control.dither import DitherParameters
 from leadthrough.control.feedforward import PassiveFeedForward
 from leadthrough.control.interface_delay import InterfaceDelay
 from leadthrough.control.lead_through import LeadThrough
+from leadthrough.control.ticks import TickClock
 from leadthrough.friction.compensation import CoulombCompensationParameters
 
 #: Before: 5 mrad at 0.05 rad/s, inside the plants' Stribeck range, a level refused

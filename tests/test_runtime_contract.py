@@ -650,7 +650,7 @@ def test_the_observer_predicts_over_the_periods_lost(monkeypatch):
     """Stamps jittering ±30 % with 60 samples lost: the observer is told 61 periods once.
 
     Every other sample is one period after the one before, whatever its jitter (the
-    samples' ticks, :class:`~leadthrough.control.calibration.TickClock`). Before, it
+    samples' ticks, :class:`~leadthrough.control.ticks.TickClock`). Before, it
     predicted over one period always (``tests/test_observer.py``: a push read into the gap).
     """
     rng = np.random.default_rng(7)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from leadthrough.control.calibration import TickClock
+from leadthrough.control.ticks import TickClock
 
 DT = 0.001  # [s]
 

@@ -44,13 +44,13 @@ from leadthrough.control.calibration import (
     Calibration,
     CalibrationParameters,
     CalibrationRun,
-    TickClock,
     gravity_share,
 )
 from leadthrough.control.constraints import VirtualConstraint, constraint_torque
 from leadthrough.control.feedforward import DelayLine, FeedForwardTorques, PassiveFeedForward
 from leadthrough.control.interface_delay import InterfaceDelay
 from leadthrough.control.parameters import LeadThroughParameters, Mode
+from leadthrough.control.ticks import TickClock
 from leadthrough.control.warm_up import exercise
 from leadthrough.errors import ParameterError, failure
 from leadthrough.estimation.observer import MomentumObserver

@@ -128,10 +128,10 @@ class SafetySupervisor:
         self.gravity_scale: FloatArray | None = None  # [–]
         self.gravity_offset: FloatArray | None = None  # [Nm]
         self._q_last_good: FloatArray | None = None
-        self._q_checked: FloatArray | None = None  # the latest reading that passed check
         self._velocity_units = VelocityUnits(dynamics.n)
-        # the latest two sound positions [rad] and the time between them [s] (their rate
-        # is the safe stop's velocity once the velocity readings are untrusted)
+        # the latest two sound positions [rad] and the time between them [s]: a reading
+        # jumps from the latest (jump_problem), and their rate is the safe stop's velocity
+        # once the velocity readings are untrusted
         self._q_sound: FloatArray | None = None
         self._q_sound_before: FloatArray | None = None
         self._sound_interval = self.dt
@@ -218,7 +218,7 @@ class SafetySupervisor:
         """
         self.state = SupervisorState.HOLDING
         self.fault_reason = None
-        self._q_last_good = self._q_checked = self._q_sound = self._q_sound_before = None
+        self._q_last_good = self._q_sound = self._q_sound_before = None
         self._velocity_units.clear()
         self._velocity_untrusted = False
         self._t_checked, self._stalled, self._rate_window = None, 0, None
@@ -257,17 +257,17 @@ class SafetySupervisor:
                 problem = problem or self._encoders.update(position, velocity, tau)
             else:
                 problem = self._encoders.reason(count)
-            if problem is None and self._q_checked is not None and previous is not None:
-                interval = max(self._t - previous, self.dt)
-                problem = jump_problem(position, self._q_checked, limits.speed, interval)
+            interval = self.dt if previous is None else max(self._t - previous, self.dt)
+            if problem is None and self._q_sound is not None and previous is not None:
+                problem = jump_problem(position, self._q_sound, limits.speed, interval)
                 units = self._velocity_units.update(position, velocity, interval)
                 self._velocity_untrusted |= units is not None
                 problem = problem or units
-            self._follow_position(position, velocity, previous, problem is None)
+            self._follow_position(position, velocity, interval, problem is None)
         except Exception as error:  # nothing may escape on the motor path
             problem, late = failure("sensor check", error), None
         if problem is None:  # a good position is held in a safe stop, whatever its time
-            self._q_last_good = self._q_checked = position
+            self._q_last_good = position
         elif self._q_last_good is None and self._position_sound(position):
             self._q_last_good = position  # nothing held yet: the reading that is sound
         elif self._q_last_good is not None and position is not None:
@@ -279,7 +279,7 @@ class SafetySupervisor:
         return self.state is not SupervisorState.FAULT
 
     def _follow_position(
-        self, position: FloatArray, velocity: FloatArray, previous: float | None, sound: bool
+        self, position: FloatArray, velocity: FloatArray, interval: float, sound: bool
     ) -> None:
         """Keep the latest sound positions; note velocity readings that cannot be trusted.
 
@@ -287,13 +287,12 @@ class SafetySupervisor:
         whose velocity readings are the fault (finite and out of range, or not the
         positions' rate) damps on the positions' rate instead (:meth:`_safe_stop`). Damped
         on velocities in degrees per second, 57× too strong, a Panda's safe stop drove it
-        2.9 rad to its joint limit at full torque (a review). ``sound``: the sample passed
-        every check (its position is sound, its velocity in range).
+        2.9 rad to its joint limit at full torque (a review). ``interval``: the time since
+        the sample before [s]; ``sound``: the sample passed every check.
         """
         if not (sound or self._position_sound(position)):
             return
-        if previous is not None:
-            self._sound_interval = max(self._t - previous, self.dt)
+        self._sound_interval = interval
         self._q_sound_before, self._q_sound = self._q_sound, position
         if sound:
             return

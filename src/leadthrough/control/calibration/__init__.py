@@ -116,7 +116,6 @@ from leadthrough.control.calibration.result import (
     implausible_friction,
 )
 from leadthrough.control.calibration.run import CalibrationRun
-from leadthrough.control.calibration.ticks import TickClock
 
 __all__ = [
     "PAYLOAD_SHARE",
@@ -124,7 +123,6 @@ __all__ = [
     "Calibration",
     "CalibrationParameters",
     "CalibrationRun",
-    "TickClock",
     "calibration_gains",
     "gravity_share",
     "implausible_friction",

@@ -2,8 +2,9 @@
 
 A robot samples at its controller's ticks, every ``dt``. A driver that stamps a sample on
 receipt (a host's clock, a ROS message's header) adds its own jitter; a lost sample leaves a
-tick without one. The start-up calibration's motion and its momentum balance are integrals
-over time, as the observer's is (over ``dt``): they need the ticks, not the stamps.
+tick without one. The start-up calibration's motion and momentum balance, and the observer's
+prediction over the periods since the sample before, are integrals over time: they need the
+ticks, not the stamps (``LeadThrough`` keeps one clock for both).
 
 :class:`TickClock` takes each stamp to the nearest tick, after removing the stamps' mean lead
 over their ticks (their phase, learned as they come, so that the first stamp's own jitter
